@@ -1,0 +1,22 @@
+"""Build description of uav_fault_estimator: Python modules and node configuration."""
+
+from setuptools import find_packages, setup
+
+PACKAGE = "uav_fault_estimator"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    packages=find_packages(exclude=["test"]),
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+    ],
+    install_requires=["setuptools"],
+    zip_safe=True,
+    maintainer="UAV fault diagnostics maintainers",
+    maintainer_email="maintainers@uav-fault-diagnostics.example.org",
+    description="Residuals, fault sensitivities, MHE fault estimation and detection for the UAV.",
+    license="Apache-2.0",
+    entry_points={"console_scripts": []},
+)

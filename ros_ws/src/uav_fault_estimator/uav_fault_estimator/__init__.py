@@ -1,0 +1,1 @@
+"""Fault diagnosis of the Aerosonde UAV (core modules import no rclpy)."""

@@ -1,0 +1,1 @@
+"""Aerosonde UAV flight simulation on JSBSim with seeded faults (core modules import no rclpy)."""

@@ -1,0 +1,35 @@
+"""Where the package's data lives: the installed share directory, or the source tree."""
+
+from pathlib import Path
+
+PACKAGE = "uav_sim"
+_SOURCE_ROOT = Path(__file__).resolve().parent.parent
+
+
+def share_dir() -> Path:
+    """The folder holding jsbsim/, scenarios/ and config/.
+
+    The colcon install space when the package is installed (ament index), else the
+    source tree, so that the core runs from a checkout without a build.
+    """
+    try:
+        from ament_index_python.packages import (
+            PackageNotFoundError,
+            get_package_share_directory,
+        )
+    except ImportError:
+        return _SOURCE_ROOT
+    try:
+        return Path(get_package_share_directory(PACKAGE))
+    except PackageNotFoundError:
+        return _SOURCE_ROOT
+
+
+def jsbsim_root() -> Path:
+    """JSBSim root folder with aircraft/, engine/ and systems/ of the Aerosonde."""
+    return share_dir() / "jsbsim"
+
+
+def scenarios_dir() -> Path:
+    """Folder of the shipped scenario files."""
+    return share_dir() / "scenarios"
