@@ -11,6 +11,8 @@ if [ ! -f "$_uav_root/ros_ws/install/setup.bash" ]; then
     return 1 2>/dev/null || exit 1
 fi
 
+# colcon's and the venv's scripts read unset variables: allow it while sourcing them.
+case $- in *u*) _uav_nounset=1; set +u ;; *) _uav_nounset= ;; esac
 # shellcheck disable=SC1091
 source "$_uav_root/.venv/bin/activate"
 if [ "${ROS_DISTRO:-}" != "jazzy" ]; then
@@ -20,6 +22,7 @@ if [ "${ROS_DISTRO:-}" != "jazzy" ]; then
 fi
 # shellcheck disable=SC1091
 source "$_uav_root/ros_ws/install/setup.bash"
+if [ -n "$_uav_nounset" ]; then set -u; fi
 
 # No DDS traffic beyond loopback on these machines; a domain of this shell's own unless
 # the caller chose one (derived from the checkout's path, so two checkouts do not meet).
@@ -34,4 +37,4 @@ fi
 if ! command -v ros2 >/dev/null 2>&1; then
     export PATH="$_uav_root/tools/bin:$PATH"
 fi
-unset _uav_root
+unset _uav_root _uav_nounset
