@@ -82,10 +82,14 @@ def graph_node() -> Iterator[Any]:
 def spin_for(node: Any, duration_s: float) -> None:
     """Process callbacks and discovery for `duration_s` of wall time."""
     import rclpy
+    from rclpy.executors import ExternalShutdownException
 
     deadline = time.monotonic() + duration_s
-    while (left := deadline - time.monotonic()) > 0:
-        rclpy.spin_once(node, timeout_sec=min(left, GRAPH_POLL_S))
+    try:
+        while (left := deadline - time.monotonic()) > 0:
+            rclpy.spin_once(node, timeout_sec=min(left, GRAPH_POLL_S))
+    except ExternalShutdownException as error:  # rclpy's SIGINT handler shut the context down
+        raise KeyboardInterrupt from error
 
 
 def absolute_name(name: str) -> str:
