@@ -16,11 +16,13 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="session", autouse=True)
-def ros_domain() -> Iterator[int]:
-    """Every ROS process of this test session runs on a domain id no other run holds."""
+def ros_domain(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
+    """Every ROS process of this test session runs on a domain id no other run holds,
+    and logs into the session's temporary folder rather than ~/.ros/log."""
     domain_id, lock = reserve_domain_id()
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ["ROS_LOG_DIR"] = str(tmp_path_factory.mktemp("ros_log"))
     try:
         yield domain_id
     finally:
