@@ -11,6 +11,7 @@ class RosGraph:
 
     def __init__(self) -> None:
         import rclpy
+        import rclpy.executors
 
         self._rclpy = rclpy
         self.context = rclpy.Context()
@@ -21,6 +22,8 @@ class RosGraph:
             start_parameter_services=False,
             enable_rosout=False,
         )
+        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
 
     def topic_types(self) -> dict[str, list[str]]:
         return dict(self.node.get_topic_names_and_types())
@@ -34,27 +37,24 @@ class RosGraph:
             time.sleep(0.1)
         return False
 
-    def collect(
-        self,
-        topic: str,
-        message_type: type,
-        duration_s: float,
-        qos: Any = 10,
-        stop_after: int | None = None,
-    ) -> list[Any]:
-        """Messages received on topic for duration_s (or until stop_after of them)."""
-        received: list[Any] = []
-        subscription = self.node.create_subscription(message_type, topic, received.append, qos)
-        deadline = time.monotonic() + duration_s
-        try:
-            while time.monotonic() < deadline and (
-                stop_after is None or len(received) < stop_after
-            ):
-                self._rclpy.spin_once(self.node, timeout_sec=0.05)
-        finally:
-            self.node.destroy_subscription(subscription)
+    def subscribe(self, topics: dict[str, type], qos: Any = 10) -> dict[str, list[Any]]:
+        """Start collecting every topic's messages into lists, filled while spin() runs."""
+        received: dict[str, list[Any]] = {topic: [] for topic in topics}
+        for topic, message_type in topics.items():
+            self.node.create_subscription(message_type, topic, received[topic].append, qos)
         return received
 
+    def spin(self, duration_s: float, until: Any = None) -> None:
+        """Process callbacks for duration_s, or until until() is true."""
+        deadline = time.monotonic() + duration_s
+        while time.monotonic() < deadline and not (until and until()):
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def unsubscribe_all(self) -> None:
+        for subscription in list(self.node.subscriptions):
+            self.node.destroy_subscription(subscription)
+
     def close(self) -> None:
+        self.executor.shutdown()
         self.node.destroy_node()
         self._rclpy.shutdown(context=self.context)

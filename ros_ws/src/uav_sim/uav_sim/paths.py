@@ -21,7 +21,7 @@ def share_dir() -> Path:
         return _SOURCE_ROOT
     try:
         return Path(get_package_share_directory(PACKAGE))
-    except PackageNotFoundError:
+    except (PackageNotFoundError, OSError):  # not installed, or no ROS environment
         return _SOURCE_ROOT
 
 

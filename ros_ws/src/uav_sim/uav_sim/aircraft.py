@@ -1,0 +1,61 @@
+"""The JSBSim Aerosonde: loading it, unit conversions and the properties the project uses.
+
+JSBSim works in feet, pounds and slugs; everything outside this module is SI.
+"""
+
+from __future__ import annotations
+
+import os
+
+import jsbsim
+
+from uav_sim.paths import jsbsim_root
+
+MODEL = "aerosonde"
+# 480 Hz: JSBSim's explicit propeller-speed update diverges at 120 Hz when the propeller
+# spins up (inertia 0.002 kg m^2 against 1.4 kW); 480 Hz is stable (measured).
+JSBSIM_DT_S = 1.0 / 480.0
+
+M_PER_FT = 0.3048
+N_PER_LBF = 4.4482216152605
+NM_PER_LBFFT = N_PER_LBF * M_PER_FT
+KG_PER_LB = 0.45359237
+KG_PER_M3_PER_SLUG_PER_FT3 = 515.378818
+MPS_PER_KT = 1852.0 / 3600.0
+
+# Deflection of a control surface at command 1 (the FCS of aerosonde.xml); flap at 1: 20 deg.
+SURFACE_LIMIT_RAD = 0.5236
+FLAP_LIMIT_RAD = 0.3491
+
+# Fault properties: percent change of the named coefficient (DESIGN.md).
+FAULT_PROPERTY = "fault/{name}-pct"
+# Propeller force and moment injected by the prediction model (aircraft XML).
+MODEL_THRUST_LBF = "external_reactions/propeller_model/magnitude"
+MODEL_MOMENT_LBFFT = "external_reactions/propeller_model/magnitude-lbsft"
+MODEL_MOMENT_AXIS = tuple(f"external_reactions/propeller_model/{axis}" for axis in "lmn")
+
+BODY_ACCELERATIONS = (
+    "accelerations/udot-ft_sec2",
+    "accelerations/vdot-ft_sec2",
+    "accelerations/wdot-ft_sec2",
+    "accelerations/pdot-rad_sec2",
+    "accelerations/qdot-rad_sec2",
+    "accelerations/rdot-rad_sec2",
+)
+
+
+def create_fdm(dt_s: float = JSBSIM_DT_S) -> jsbsim.FGFDMExec:
+    """A silent JSBSim executive with the Aerosonde loaded, at time step dt_s [s]."""
+    os.environ.setdefault("JSBSIM_DEBUG", "0")  # no start-up banner on stdout
+    fdm = jsbsim.FGFDMExec(str(jsbsim_root()), None)
+    fdm.set_debug_level(0)
+    if not fdm.load_model(MODEL):
+        raise RuntimeError(f"JSBSim could not load the aircraft '{MODEL}' from {jsbsim_root()}")
+    fdm.set_dt(dt_s)
+    return fdm
+
+
+def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
+    """Seed faults [%] by name into the aircraft's fault properties."""
+    for name, value_pct in faults_pct.items():
+        fdm[FAULT_PROPERTY.format(name=name)] = value_pct

@@ -1,0 +1,127 @@
+"""Autopilot of the simulated Aerosonde: attitude inner loops, altitude and airspeed hold.
+
+Sign conventions are source C's (AeroSim Aerosonde): a positive elevator pitches nose
+down, a positive aileron rolls left, a positive rudder yaws left. Every loop starts from
+the trim, so that straight and level flight needs no correction:
+
+    theta_cmd = theta_trim + PI(h_cmd - h) - k_hdot hdot      altitude hold (PI, as the paper)
+    delta_e   = delta_e_trim + k_theta (theta - theta_cmd) + k_q q
+    throttle  = throttle_trim + PI(V_cmd - V)                  airspeed hold on throttle
+    delta_a   = k_phi (phi - phi_cmd) + k_p p                  roll from the guidance
+    delta_r   = -k_beta beta                                   turn coordination
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from uav_sim.aircraft import SURFACE_LIMIT_RAD
+from uav_sim.trim import Trim
+
+
+@dataclass(frozen=True)
+class AutopilotGains:
+    """Loop gains (SI, radians); tuned on the simulator, see tests/sim."""
+
+    altitude_p_radpm: float = 0.015
+    altitude_i_radpms: float = 0.0015
+    climb_rate_d_radspm: float = 0.03
+    pitch_limit_rad: float = 0.26
+    pitch_p: float = 1.0
+    pitch_rate_d_s: float = 0.1
+    airspeed_p_permps: float = 0.12
+    airspeed_i_permps_s: float = 0.03
+    roll_p: float = 0.5
+    roll_rate_d_s: float = 0.02
+    roll_limit_rad: float = 0.52
+    sideslip_p: float = 0.5
+
+
+@dataclass(frozen=True)
+class FlightState:
+    """What the autopilot measures, SI and radians."""
+
+    altitude_m: float
+    climb_rate_mps: float
+    airspeed_mps: float
+    roll_rad: float
+    pitch_rad: float
+    sideslip_rad: float
+    body_rates_radps: np.ndarray  # p, q, r
+
+
+@dataclass(frozen=True)
+class SurfaceCommands:
+    elevator_rad: float
+    aileron_rad: float
+    rudder_rad: float
+    throttle: float
+
+
+class PI:
+    """Proportional-integral law; the integrator stops while the output is saturated."""
+
+    def __init__(self, kp: float, ki: float, low: float, high: float) -> None:
+        self.kp, self.ki, self.low, self.high = kp, ki, low, high
+        self.integral = 0.0
+
+    def update(self, error: float, offset: float, dt_s: float) -> float:
+        unclipped = offset + self.kp * error + self.ki * (self.integral + error * dt_s)
+        output = float(np.clip(unclipped, self.low, self.high))
+        if output == unclipped:
+            self.integral += error * dt_s
+        return output
+
+
+class Autopilot:
+    """Holds altitude and airspeed, and banks to the roll angle the guidance asks for."""
+
+    def __init__(
+        self,
+        trim: Trim,
+        altitude_cmd_m: float,
+        airspeed_cmd_mps: float,
+        gains: AutopilotGains | None = None,
+    ) -> None:
+        self.trim = trim
+        self.gains = gains or AutopilotGains()
+        self.altitude_cmd_m = altitude_cmd_m
+        self.airspeed_cmd_mps = airspeed_cmd_mps
+        g = self.gains
+        self.altitude_hold = PI(
+            g.altitude_p_radpm,
+            g.altitude_i_radpms,
+            trim.alpha_rad - g.pitch_limit_rad,
+            trim.alpha_rad + g.pitch_limit_rad,
+        )
+        self.airspeed_hold = PI(g.airspeed_p_permps, g.airspeed_i_permps_s, 0.0, 1.0)
+
+    def update(self, state: FlightState, roll_cmd_rad: float, dt_s: float) -> SurfaceCommands:
+        """Surface and throttle commands for one control period dt_s [s]."""
+        g = self.gains
+        p, q, _ = state.body_rates_radps
+        pitch_cmd_rad = self.altitude_hold.update(
+            self.altitude_cmd_m - state.altitude_m,
+            self.trim.alpha_rad - g.climb_rate_d_radspm * state.climb_rate_mps,
+            dt_s,
+        )
+        elevator_rad = (
+            self.trim.elevator_rad
+            + g.pitch_p * (state.pitch_rad - pitch_cmd_rad)
+            + g.pitch_rate_d_s * q
+        )
+        throttle = self.airspeed_hold.update(
+            self.airspeed_cmd_mps - state.airspeed_mps, self.trim.throttle, dt_s
+        )
+        roll_cmd_rad = float(np.clip(roll_cmd_rad, -g.roll_limit_rad, g.roll_limit_rad))
+        aileron_rad = g.roll_p * (state.roll_rad - roll_cmd_rad) + g.roll_rate_d_s * p
+        rudder_rad = -g.sideslip_p * state.sideslip_rad
+        limit = SURFACE_LIMIT_RAD
+        return SurfaceCommands(
+            elevator_rad=float(np.clip(elevator_rad, -limit, limit)),
+            aileron_rad=float(np.clip(aileron_rad, -limit, limit)),
+            rudder_rad=float(np.clip(rudder_rad, -limit, limit)),
+            throttle=throttle,
+        )

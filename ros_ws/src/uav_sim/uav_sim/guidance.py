@@ -1,0 +1,62 @@
+"""Waypoint guidance: a closed path of straight legs, followed with a course vector field.
+
+For the leg from waypoint a to b, with course chi_q and cross-track error e (right of the
+leg positive), the commanded course is (Beard & McLain, Small Unmanned Aircraft, eq. 10.8)
+
+    chi_cmd = chi_q - chi_inf (2/pi) atan(k_path e),
+
+and the bank angle turns the ground course onto it: phi_cmd = k_course wrap(chi_cmd - chi).
+Flying the ground course (not the heading) is what makes the law hold the path in wind.
+A leg ends when the aircraft crosses the line through b normal to the leg.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def wrap_angle(angle_rad: float) -> float:
+    """Angle wrapped to [-pi, pi)."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
+
+
+class WaypointGuidance:
+    """Bank-angle commands that fly the waypoints as a closed loop, starting at leg 0 -> 1."""
+
+    def __init__(
+        self,
+        waypoints_ne_m: tuple[tuple[float, float], ...],
+        approach_angle_rad: float = math.radians(60.0),
+        path_gain_perm: float = 0.02,
+        course_gain: float = 1.2,
+    ) -> None:
+        self.waypoints = np.asarray(waypoints_ne_m, dtype=float)
+        self.approach_angle_rad = approach_angle_rad
+        self.path_gain_perm = path_gain_perm
+        self.course_gain = course_gain
+        self.leg = 0
+        self.legs_completed = 0
+
+    def _leg_points(self) -> tuple[np.ndarray, np.ndarray]:
+        count = len(self.waypoints)
+        return self.waypoints[self.leg % count], self.waypoints[(self.leg + 1) % count]
+
+    def roll_command(self, position_ne_m: np.ndarray, ground_velocity_ne_mps: np.ndarray) -> float:
+        """Bank angle [rad] for the aircraft at position_ne_m flying ground_velocity_ne_mps."""
+        start, end = self._leg_points()
+        direction = (end - start) / np.linalg.norm(end - start)
+        if np.dot(position_ne_m - end, direction) >= 0.0:
+            self.leg = (self.leg + 1) % len(self.waypoints)
+            self.legs_completed += 1
+            start, end = self._leg_points()
+            direction = (end - start) / np.linalg.norm(end - start)
+        leg_course = math.atan2(direction[1], direction[0])
+        offset = position_ne_m - start
+        cross_track_m = direction[0] * offset[1] - direction[1] * offset[0]
+        course_cmd = leg_course - self.approach_angle_rad * (2.0 / math.pi) * math.atan(
+            self.path_gain_perm * cross_track_m
+        )
+        course = math.atan2(ground_velocity_ne_mps[1], ground_velocity_ne_mps[0])
+        return self.course_gain * wrap_angle(course_cmd - course)

@@ -1,0 +1,92 @@
+"""Conversions between the core's numpy arrays and the project's messages (no rclpy).
+
+Field names come from uav_sim.channels, so the order of an array is the order of its
+channel tuple and a message field is ``<channel>_<unit>``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from std_msgs.msg import Header
+from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
+
+from uav_sim.channels import (
+    CONTROL_CHANNELS,
+    CONTROL_UNITS,
+    STATE_CHANNELS,
+    STATE_UNITS,
+    field_name,
+)
+
+NED_FRAME = "ned"
+STATE_FIELDS = tuple(map(field_name, STATE_CHANNELS, STATE_UNITS))
+CONTROL_FIELDS = tuple(map(field_name, CONTROL_CHANNELS, CONTROL_UNITS))
+NANOSECONDS_PER_SECOND = 1_000_000_000
+
+
+def stamp(time_s: float) -> Time:
+    """A ROS time from seconds of simulation time (rounded to the nanosecond)."""
+    seconds, nanoseconds = divmod(round(time_s * NANOSECONDS_PER_SECOND), NANOSECONDS_PER_SECOND)
+    return Time(sec=int(seconds), nanosec=int(nanoseconds))
+
+
+def stamp_seconds(time: Time) -> float:
+    """Seconds from a ROS time."""
+    return time.sec + time.nanosec / NANOSECONDS_PER_SECOND
+
+
+def header(time_s: float, frame_id: str = "") -> Header:
+    return Header(stamp=stamp(time_s), frame_id=frame_id)
+
+
+def state_message(time_s: float, state: Sequence[float]) -> AircraftState:
+    """AircraftState from a (14,) array in STATE_CHANNELS order (NaN: channel missing)."""
+    message = AircraftState(header=header(time_s, NED_FRAME))
+    for field, value in zip(STATE_FIELDS, state, strict=True):
+        setattr(message, field, float(value))
+    return message
+
+
+def state_array(message: AircraftState) -> np.ndarray:
+    """(14,) array in STATE_CHANNELS order from an AircraftState."""
+    return np.array([getattr(message, field) for field in STATE_FIELDS], dtype=float)
+
+
+def controls_message(time_s: float, controls: Sequence[float]) -> ControlInputs:
+    """ControlInputs from a (7,) array in CONTROL_CHANNELS order (ignition: nonzero is on)."""
+    message = ControlInputs(header=header(time_s))
+    for field, value in zip(CONTROL_FIELDS, controls, strict=True):
+        setattr(message, field, bool(value) if field == "ignition" else float(value))
+    return message
+
+
+def controls_array(message: ControlInputs) -> np.ndarray:
+    """(7,) array in CONTROL_CHANNELS order from ControlInputs (ignition as 0.0 or 1.0)."""
+    return np.array([float(getattr(message, field)) for field in CONTROL_FIELDS])
+
+
+def wind_message(time_s: float, wind_ned_mps: Sequence[float], tau_s: float) -> WindEstimate:
+    north, east, down = (float(value) for value in wind_ned_mps)
+    return WindEstimate(
+        header=header(time_s, NED_FRAME),
+        north_mps=north,
+        east_mps=east,
+        down_mps=down,
+        filter_time_constant_s=float(tau_s),
+    )
+
+
+def wind_array(message: WindEstimate) -> np.ndarray:
+    """(3,) NED wind [m/s] from a WindEstimate."""
+    return np.array([message.north_mps, message.east_mps, message.down_mps])
+
+
+def fault_vector_message(
+    time_s: float, names: Sequence[str], values_pct: Sequence[float]
+) -> FaultVector:
+    return FaultVector(
+        header=header(time_s), names=list(names), values_pct=[float(v) for v in values_pct]
+    )

@@ -1,0 +1,78 @@
+"""What every node of the project shares: QoS per kind of topic, parameters declared with
+descriptors from the package's config YAML, and a /diagnostics publisher."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+from ament_index_python.packages import get_package_share_directory
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+# Sensor-rate streams and estimates: reliable and keep-all, so that a fast simulation loses
+# nothing while subscribers catch up.
+STREAM_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_ALL,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+# /clock: only the newest time matters.
+CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
+DIAGNOSTICS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+
+OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+
+
+def default_parameters(package: str, config_file: str) -> dict[str, Any]:
+    """The `/**: ros__parameters` mapping of share/<package>/config/<config_file>."""
+    path = Path(get_package_share_directory(package)) / "config" / config_file
+    with open(path) as stream:
+        return yaml.safe_load(stream)["/**"]["ros__parameters"]
+
+
+def declare_parameters(
+    node: Node, package: str, config_file: str, descriptions: dict[str, str]
+) -> dict[str, Any]:
+    """Declare each described parameter with its default from the package's config YAML.
+
+    Values given on the command line or in a --params-file override the defaults. Returns
+    the parameters' values by name.
+    """
+    defaults = default_parameters(package, config_file)
+    missing = set(descriptions) ^ set(defaults)
+    if missing:
+        raise KeyError(f"parameters without both a description and a default: {sorted(missing)}")
+    for name, description in descriptions.items():
+        node.declare_parameter(name, defaults[name], ParameterDescriptor(description=description))
+    return {name: node.get_parameter(name).value for name in descriptions}
+
+
+class Diagnostics:
+    """Publishes the node's latest health on /diagnostics once a second of wall time.
+
+    Wall time, not simulation time: health is for the people and tools watching the run.
+    """
+
+    def __init__(self, node: Node, period_s: float = 1.0) -> None:
+        self._node = node
+        self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", DIAGNOSTICS_QOS)
+        self._status = DiagnosticStatus(
+            level=OK, name=node.get_fully_qualified_name(), message="starting"
+        )
+        node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
+
+    def update(self, level: bytes, message: str, values: dict[str, Any]) -> None:
+        """Set the status published next (level: OK, WARN or ERROR)."""
+        self._status.level = level
+        self._status.message = message
+        self._status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
+
+    def publish(self) -> None:
+        array = DiagnosticArray(status=[self._status])
+        array.header.stamp = self._node.get_clock().now().to_msg()
+        self._publisher.publish(array)

@@ -1,0 +1,256 @@
+"""Scenario files (DESIGN.md schema): load, check every key, and fail with one clear message.
+
+A scenario names the flight (start, waypoints, duration), the wind and turbulence, the
+faults seeded into the aircraft and the sensor dropouts of the state stream. Loading is
+strict: an unknown or missing key, a wrong type or an impossible value stops with a
+ScenarioError naming the file and the key, before anything starts.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from uav_sim.channels import FAULT_NAMES, STATE_CHANNELS
+from uav_sim.paths import scenarios_dir
+
+TURBULENCE_LEVELS = ("none", "light", "moderate", "severe")
+DEFAULT_SCENARIO = "default.yaml"
+
+
+class ScenarioError(ValueError):
+    """A scenario file that cannot be flown; the message names the file and the key."""
+
+
+@dataclass(frozen=True)
+class InitialCondition:
+    latitude_deg: float
+    longitude_deg: float
+    altitude_m: float
+    airspeed_mps: float
+    heading_deg: float
+
+
+@dataclass(frozen=True)
+class Wind:
+    north_mps: float
+    east_mps: float
+    down_mps: float
+    turbulence: str
+    filter_time_constant_s: float
+
+
+@dataclass(frozen=True)
+class SeededFault:
+    """A fault ramping linearly from 0 at start_s to magnitude_pct at start_s + ramp_s."""
+
+    name: str
+    start_s: float
+    ramp_s: float
+    magnitude_pct: float
+
+    def value_pct(self, time_s: float) -> float:
+        if time_s < self.start_s:
+            return 0.0
+        if self.ramp_s <= 0.0 or time_s >= self.start_s + self.ramp_s:
+            return self.magnitude_pct
+        return self.magnitude_pct * (time_s - self.start_s) / self.ramp_s
+
+
+@dataclass(frozen=True)
+class SensorDropout:
+    """A state channel missing from the state stream for start_s <= t < end_s."""
+
+    channel: str
+    start_s: float
+    end_s: float
+
+    def active(self, time_s: float) -> bool:
+        return self.start_s <= time_s < self.end_s
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    duration_s: float
+    seed: int
+    initial: InitialCondition
+    waypoints_ne_m: tuple[tuple[float, float], ...]
+    wind: Wind
+    faults: tuple[SeededFault, ...] = ()
+    sensor_dropouts: tuple[SensorDropout, ...] = ()
+    estimator: dict[str, Any] = field(default_factory=dict)
+    path: Path | None = None
+
+    def faults_pct(self, time_s: float) -> dict[str, float]:
+        """Seeded value [%] of every fault name at time_s (several entries of a name add)."""
+        values = dict.fromkeys(FAULT_NAMES, 0.0)
+        for fault in self.faults:
+            values[fault.name] += fault.value_pct(time_s)
+        return values
+
+    def dropped_channels(self, time_s: float) -> set[str]:
+        return {dropout.channel for dropout in self.sensor_dropouts if dropout.active(time_s)}
+
+
+def default_scenario_path() -> Path:
+    return scenarios_dir() / DEFAULT_SCENARIO
+
+
+def _is_number(value: Any) -> bool:
+    """A finite int or float (YAML's true/false are not numbers)."""
+    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
+
+
+class _Reader:
+    """Checks one mapping of the file; every message names the file and the key's path."""
+
+    def __init__(self, path: Path, data: Any, where: str) -> None:
+        self.path = path
+        self.where = where
+        if not isinstance(data, dict):
+            self.fail(f"'{where or 'the file'}' must be a mapping, got {type(data).__name__}")
+        self.data = data
+
+    def fail(self, message: str) -> None:
+        raise ScenarioError(f"scenario {self.path}: {message}")
+
+    def key(self, name: str) -> str:
+        return f"{self.where}.{name}" if self.where else name
+
+    def check_keys(self, required: set[str], optional: set[str] = frozenset()) -> None:
+        for name in self.data:
+            if name not in required | optional:
+                known = ", ".join(sorted(required | optional))
+                self.fail(f"unknown key '{self.key(str(name))}' (known: {known})")
+        for name in sorted(required):
+            if name not in self.data:
+                self.fail(f"missing required key '{self.key(name)}'")
+
+    def number(self, name: str, minimum: float | None = None, positive: bool = False) -> float:
+        value = self.data[name]
+        if not _is_number(value):
+            self.fail(f"'{self.key(name)}' must be a finite number, got {value!r}")
+        if positive and value <= 0:
+            self.fail(f"'{self.key(name)}' must be positive, got {value!r}")
+        if minimum is not None and value < minimum:
+            self.fail(f"'{self.key(name)}' must be at least {minimum:g}, got {value!r}")
+        return float(value)
+
+    def choice(self, name: str, choices: tuple[str, ...]) -> str:
+        value = self.data[name]
+        if value not in choices:
+            self.fail(f"'{self.key(name)}' must be one of {', '.join(choices)}; got {value!r}")
+        return value
+
+    def items(self, name: str) -> list[Any]:
+        value = self.data.get(name, [])
+        if value is None:
+            return []
+        if not isinstance(value, list):
+            self.fail(f"'{self.key(name)}' must be a list, got {type(value).__name__}")
+        return value
+
+    def child(self, name: str) -> _Reader:
+        return _Reader(self.path, self.data[name], self.key(name))
+
+
+def _initial(reader: _Reader) -> InitialCondition:
+    names = {"latitude_deg", "longitude_deg", "altitude_m", "airspeed_mps", "heading_deg"}
+    reader.check_keys(names)
+    return InitialCondition(
+        latitude_deg=reader.number("latitude_deg"),
+        longitude_deg=reader.number("longitude_deg"),
+        altitude_m=reader.number("altitude_m", positive=True),
+        airspeed_mps=reader.number("airspeed_mps", positive=True),
+        heading_deg=reader.number("heading_deg"),
+    )
+
+
+def _wind(reader: _Reader) -> Wind:
+    reader.check_keys({"north_mps", "east_mps", "down_mps", "turbulence", "filter_time_constant_s"})
+    return Wind(
+        north_mps=reader.number("north_mps"),
+        east_mps=reader.number("east_mps"),
+        down_mps=reader.number("down_mps"),
+        turbulence=reader.choice("turbulence", TURBULENCE_LEVELS),
+        filter_time_constant_s=reader.number("filter_time_constant_s", positive=True),
+    )
+
+
+def _waypoints(reader: _Reader) -> tuple[tuple[float, float], ...]:
+    points = reader.items("waypoints_ne_m")
+    if len(points) < 2:
+        reader.fail("'waypoints_ne_m' needs at least two [north_m, east_m] points")
+    for index, point in enumerate(points):
+        if not (isinstance(point, list) and len(point) == 2 and all(map(_is_number, point))):
+            reader.fail(f"'waypoints_ne_m[{index}]' must be [north_m, east_m], got {point!r}")
+    return tuple((float(north), float(east)) for north, east in points)
+
+
+def _fault(reader: _Reader) -> SeededFault:
+    reader.check_keys({"name", "start_s", "ramp_s", "magnitude_pct"})
+    return SeededFault(
+        name=reader.choice("name", FAULT_NAMES),
+        start_s=reader.number("start_s", minimum=0.0),
+        ramp_s=reader.number("ramp_s", minimum=0.0),
+        magnitude_pct=reader.number("magnitude_pct"),
+    )
+
+
+def _dropout(reader: _Reader) -> SensorDropout:
+    reader.check_keys({"channel", "start_s", "end_s"})
+    dropout = SensorDropout(
+        channel=reader.choice("channel", STATE_CHANNELS),
+        start_s=reader.number("start_s", minimum=0.0),
+        end_s=reader.number("end_s", minimum=0.0),
+    )
+    if dropout.end_s <= dropout.start_s:
+        reader.fail(f"'{reader.key('end_s')}' must be after start_s")
+    return dropout
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and check a scenario file; raises ScenarioError with one clear message."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except OSError as error:
+        raise ScenarioError(f"scenario {path}: cannot read the file ({error.strerror})") from None
+    except yaml.YAMLError as error:
+        raise ScenarioError(f"scenario {path}: not valid YAML ({error})") from None
+    reader = _Reader(path, data, "")
+    reader.check_keys(
+        {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
+        {"faults", "sensor_dropouts", "estimator"},
+    )
+    if not isinstance(data["name"], str) or not data["name"]:
+        reader.fail(f"'name' must be a non-empty string, got {data['name']!r}")
+    seed = data["seed"]
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        reader.fail(f"'seed' must be a non-negative integer, got {seed!r}")
+    estimator = data.get("estimator") or {}
+    if not isinstance(estimator, dict):
+        reader.fail("'estimator' must be a mapping of estimator parameters")
+    return Scenario(
+        name=data["name"],
+        duration_s=reader.number("duration_s", positive=True),
+        seed=seed,
+        initial=_initial(reader.child("initial")),
+        waypoints_ne_m=_waypoints(reader),
+        wind=_wind(reader.child("wind")),
+        faults=tuple(
+            _fault(_Reader(path, item, f"faults[{index}]"))
+            for index, item in enumerate(reader.items("faults"))
+        ),
+        sensor_dropouts=tuple(
+            _dropout(_Reader(path, item, f"sensor_dropouts[{index}]"))
+            for index, item in enumerate(reader.items("sensor_dropouts"))
+        ),
+        estimator=dict(estimator),
+        path=path,
+    )

@@ -1,0 +1,153 @@
+"""sim_node: flies a scenario in the core Simulation and publishes it at the sensor rate.
+
+Publishes (relative names, STREAM_QOS): `state` (AircraftState), `controls`
+(ControlInputs), `wind/filtered` (WindEstimate), `faults/seeded` (FaultVector); and `/clock`
+(the simulation time, for nodes with use_sim_time) and `/diagnostics`. Ends by itself at
+the scenario's end, with exit status 0; a bad scenario ends it before it starts, status 1.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
+
+from uav_sim.channels import FAULT_NAMES, STATE_CHANNELS
+from uav_sim.messages import (
+    controls_message,
+    fault_vector_message,
+    stamp,
+    state_message,
+    wind_message,
+)
+from uav_sim.node_tools import CLOCK_QOS, OK, STREAM_QOS, WARN, Diagnostics, declare_parameters
+from uav_sim.scenario import default_scenario_path, load_scenario
+from uav_sim.simulation import Sample, Simulation
+
+PARAMETERS = {
+    "scenario": "scenario YAML file; empty for the shipped default scenario",
+    "sensor_rate_hz": "rate of every published stream and of /clock [Hz]",
+    "real_time_factor": "simulated seconds per wall second; 0: as fast as subscribers keep up",
+    "wait_for_subscribers": "start once the state topic has this many subscriptions",
+}
+ACK_TIMEOUT_S = 10.0
+
+
+class SimNode(Node):
+    """Thin adapter: parameters in, Simulation steps, arrays to messages, diagnostics."""
+
+    def __init__(self) -> None:
+        super().__init__("sim_node")
+        self.parameters = declare_parameters(self, "uav_sim", "sim_node.yaml", PARAMETERS)
+        scenario_path = self.parameters["scenario"] or str(default_scenario_path())
+        self.scenario = load_scenario(scenario_path)
+        self.simulation = Simulation(
+            self.scenario, sensor_rate_hz=self.parameters["sensor_rate_hz"]
+        )
+        self.state_publisher = self.create_publisher(AircraftState, "state", STREAM_QOS)
+        self.stream_publishers = [
+            self.state_publisher,
+            self.create_publisher(ControlInputs, "controls", STREAM_QOS),
+            self.create_publisher(WindEstimate, "wind/filtered", STREAM_QOS),
+            self.create_publisher(FaultVector, "faults/seeded", STREAM_QOS),
+        ]
+        self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
+        self.diagnostics = Diagnostics(self)
+        self.get_logger().info(
+            f"scenario '{self.scenario.name}' from {scenario_path}: {self.scenario.duration_s:g} s "
+            f"at {self.parameters['sensor_rate_hz']:g} Hz, real-time factor "
+            f"{self.parameters['real_time_factor']:g}"
+        )
+
+    def publish(self, sample: Sample) -> None:
+        """Publish one sensor sample on every stream, then the clock."""
+        time_s = sample.time_s
+        messages = [
+            state_message(time_s, sample.state),
+            controls_message(time_s, sample.controls),
+            wind_message(
+                time_s, sample.wind_filtered_ned_mps, self.scenario.wind.filter_time_constant_s
+            ),
+            fault_vector_message(time_s, FAULT_NAMES, sample.seeded_faults_pct),
+        ]
+        for publisher, message in zip(self.stream_publishers, messages, strict=True):
+            publisher.publish(message)
+        self.clock_publisher.publish(Clock(clock=stamp(time_s)))
+
+    def wait_until_delivered(self) -> None:
+        """Block until every subscriber has acknowledged what was published (no loss)."""
+        for publisher in self.stream_publishers:
+            publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT_S))
+
+    def wait_for_subscribers(self) -> None:
+        wanted = self.parameters["wait_for_subscribers"]
+        if wanted > 0:
+            self.get_logger().info(f"waiting for {wanted} subscription(s) of state")
+        while rclpy.ok() and self.state_publisher.get_subscription_count() < wanted:
+            rclpy.spin_once(self, timeout_sec=0.05)
+
+    def fly(self) -> None:
+        """Step and publish until the scenario's end, paced by the real-time factor."""
+        rate = self.parameters["real_time_factor"]
+        started = time.monotonic()
+        self.publish(self.simulation.sample())
+        while rclpy.ok() and not self.simulation.finished:
+            sample = self.simulation.step()
+            self.publish(sample)
+            if rate > 0:
+                time.sleep(max(0.0, started + sample.time_s / rate - time.monotonic()))
+            else:
+                self.wait_until_delivered()
+            self.report(sample, time.monotonic() - started)
+            rclpy.spin_once(self, timeout_sec=0.0)
+        self.wait_until_delivered()
+        self.get_logger().info(
+            f"scenario '{self.scenario.name}' finished at {self.simulation.time_s:g} s of "
+            f"simulation time after {time.monotonic() - started:.1f} s of wall time"
+        )
+
+    def report(self, sample: Sample, wall_s: float) -> None:
+        missing = [
+            name
+            for name, value in zip(STATE_CHANNELS, sample.state, strict=True)
+            if not math.isfinite(value)
+        ]
+        values = {
+            "sim_time_s": f"{sample.time_s:.2f}",
+            "real_time_factor": f"{sample.time_s / wall_s:.1f}" if wall_s > 0 else "-",
+            "scenario": self.scenario.name,
+            "missing_channels": ",".join(missing) or "none",
+        }
+        if missing:
+            self.diagnostics.update(WARN, "sensor dropout: " + ", ".join(missing), values)
+        else:
+            self.diagnostics.update(OK, "flying", values)
+
+
+def main(args: list[str] | None = None) -> int:
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = SimNode()
+        node.wait_for_subscribers()
+        node.fly()
+        return 0
+    except ValueError as error:  # a bad scenario (ScenarioError) or parameter
+        print(f"sim_node: {error}", file=sys.stderr)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        return 0
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

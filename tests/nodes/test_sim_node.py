@@ -1,0 +1,99 @@
+"""sim_node as a process: every stream at the sensor rate in sim time, /clock, its own end."""
+
+from __future__ import annotations
+
+import subprocess
+
+import pytest
+import yaml
+from helpers.processes import ros2_run_argv
+from rosgraph_msgs.msg import Clock
+from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
+from uav_sim.messages import stamp_seconds
+from uav_sim.node_tools import STREAM_QOS
+from uav_sim.scenario import default_scenario_path
+
+pytestmark = pytest.mark.integration
+
+DURATION_S = 10.0
+RATE_HZ = 20.0
+STREAMS = {
+    "/state": AircraftState,
+    "/controls": ControlInputs,
+    "/wind/filtered": WindEstimate,
+    "/faults/seeded": FaultVector,
+}
+
+
+@pytest.fixture
+def short_scenario(tmp_path):
+    """The default scenario cut to DURATION_S."""
+    scenario = yaml.safe_load(default_scenario_path().read_text())
+    scenario["duration_s"] = DURATION_S
+    path = tmp_path / "short.yaml"
+    path.write_text(yaml.safe_dump(scenario))
+    return path
+
+
+@pytest.fixture
+def graph(ros_graph):
+    yield ros_graph
+    ros_graph.unsubscribe_all()
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("real_time_factor", [5.0, 0.0], ids=["paced", "as-fast-as-acked"])
+def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
+    short_scenario, graph, start_process, real_time_factor
+):
+    received = graph.subscribe(STREAMS, STREAM_QOS)
+    clock = graph.subscribe({"/clock": Clock})["/clock"]
+    sim = start_process(
+        ros2_run_argv(
+            "uav_sim",
+            "sim_node",
+            ros_args=[
+                "-p",
+                f"scenario:={short_scenario}",
+                "-p",
+                f"sensor_rate_hz:={RATE_HZ}",
+                "-p",
+                f"real_time_factor:={real_time_factor}",
+                "-p",
+                "wait_for_subscribers:=1",
+            ],
+        ),
+        "sim_node",
+    )
+    expected = int(DURATION_S * RATE_HZ) + 1
+    graph.spin(60.0, until=lambda: not sim.running())
+    graph.spin(1.0)  # the last messages in flight
+    assert sim.wait(timeout_s=10) == 0, sim.output()
+    assert "finished at 10 s of simulation time" in sim.output()
+    for topic, messages in received.items():
+        stamps = [stamp_seconds(message.header.stamp) for message in messages]
+        print(f"{topic}: {len(stamps)} messages, stamps {stamps[0]:.2f} .. {stamps[-1]:.2f} s")
+        assert len(stamps) == expected, topic
+        assert stamps == pytest.approx([k / RATE_HZ for k in range(expected)], abs=1e-9), topic
+    assert clock and stamp_seconds(clock[-1].clock) == pytest.approx(DURATION_S)
+    seeded = received["/faults/seeded"][-1]
+    assert list(seeded.names)[:4] == [
+        "right_wing_lift_loss",
+        "right_wing_drag_increase",
+        "left_wing_lift_loss",
+        "left_wing_drag_increase",
+    ]
+
+
+@pytest.mark.timeout(60)
+def test_sim_node_with_a_missing_scenario_ends_with_one_message(tmp_path):
+    missing = tmp_path / "nope.yaml"
+    result = subprocess.run(
+        ros2_run_argv("uav_sim", "sim_node", ros_args=["-p", f"scenario:={missing}"]),
+        capture_output=True,
+        text=True,
+        timeout=50,
+    )
+    assert result.returncode == 1
+    assert "Traceback" not in result.stderr
+    assert str(missing) in result.stderr

@@ -1,0 +1,100 @@
+"""The simulated Aerosonde flies: trim in calm air, the default loop in wind, repeatably."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from helpers.flights import calm, column, fly
+from uav_sim.channels import STATE_CHANNELS
+from uav_sim.scenario import SensorDropout
+from uav_sim.simulation import Simulation
+
+ALTITUDE = STATE_CHANNELS.index("altitude")
+
+
+def test_trim_holds_level_flight_for_60_s_in_calm_air(default_scenario):
+    samples = fly(calm(default_scenario, 60.0))
+    altitude_error_m = column(samples, "state", ALTITUDE) - default_scenario.initial.altitude_m
+    airspeed_error_mps = column(samples, "airspeed_mps") - default_scenario.initial.airspeed_mps
+    print(
+        f"calm 60 s: altitude error {np.abs(altitude_error_m).max():.3f} m, "
+        f"airspeed error {np.abs(airspeed_error_mps).max():.3f} m/s"
+    )
+    assert samples[-1].time_s == pytest.approx(60.0)
+    assert np.abs(altitude_error_m).max() <= 5.0
+    assert np.abs(airspeed_error_mps).max() <= 1.0
+
+
+def test_default_loop_is_flown_in_its_wind(default_scenario, default_flight):
+    position = column(default_flight, "position_ne_m")
+    time_s = column(default_flight, "time_s")
+    for waypoint in default_scenario.waypoints_ne_m:
+        closest_m = np.hypot(*(position - waypoint).T).min()
+        print(f"waypoint {waypoint}: passed at {closest_m:.1f} m")
+        assert closest_m <= 100.0
+    altitude_error_m = (
+        column(default_flight, "state", ALTITUDE) - default_scenario.initial.altitude_m
+    )
+    worst_m = np.abs(altitude_error_m[time_s >= 30.0]).max()
+    print(f"largest altitude error after 30 s: {worst_m:.1f} m")
+    assert worst_m <= 30.0
+    assert all(np.isfinite(sample.state).all() for sample in default_flight)
+
+
+def test_wind_is_20_to_25_percent_of_airspeed_with_turbulence(default_scenario, default_flight):
+    wind = column(default_flight, "wind_ned_mps")
+    background = np.hypot(default_scenario.wind.north_mps, default_scenario.wind.east_mps)
+    turbulence_std = (wind - wind.mean(axis=0)).std(axis=0)
+    print(f"background {background:.1f} m/s, turbulence std NED {turbulence_std.round(2)} m/s")
+    assert 0.2 <= background / default_scenario.initial.airspeed_mps <= 0.25
+    assert np.all(turbulence_std > 0.5)
+
+
+def test_same_seed_same_flight_other_seed_other_flight(default_scenario):
+    short = dataclasses.replace(default_scenario, duration_s=10.0)
+    first, again = fly(short), fly(short)
+    other = fly(dataclasses.replace(short, seed=short.seed + 1))
+    assert np.array_equal(column(first, "state"), column(again, "state"))
+    assert not np.allclose(column(first, "wind_ned_mps"), column(other, "wind_ned_mps"))
+
+
+def test_filtered_wind_is_the_exact_discretisation_of_eq_4(default_scenario, default_flight):
+    wind = column(default_flight, "wind_ned_mps")
+    filtered = column(default_flight, "wind_filtered_ned_mps")
+    period_s = default_flight[1].time_s - default_flight[0].time_s
+    decay = np.exp(-period_s / default_scenario.wind.filter_time_constant_s)
+    expected = np.empty_like(wind)
+    expected[0] = wind[0]
+    for k in range(1, len(wind)):
+        expected[k] = decay * expected[k - 1] + (1.0 - decay) * wind[k]
+    np.testing.assert_allclose(filtered, expected, rtol=0, atol=1e-12)
+
+
+def test_seeded_faults_follow_the_scenario(default_scenario, default_flight):
+    seeded = column(default_flight, "seeded_faults_pct")
+    time_s = column(default_flight, "time_s")
+    assert seeded[time_s < 60.0, 0].max() == 0.0
+    assert seeded[np.isclose(time_s, 80.0), 0] == pytest.approx(5.0)  # halfway up its ramp
+    assert seeded[-1, 0] == pytest.approx(10.0)
+    assert seeded[np.isclose(time_s, 150.0), 3] == pytest.approx(25.0)  # a step
+
+
+def test_sensor_dropout_is_nan_for_its_duration(default_scenario):
+    dropout = SensorDropout("pitch_rate", start_s=1.0, end_s=2.0)
+    scenario = dataclasses.replace(default_scenario, duration_s=3.0, sensor_dropouts=(dropout,))
+    samples = fly(scenario)
+    pitch_rate = column(samples, "state", STATE_CHANNELS.index("pitch_rate"))
+    time_s = column(samples, "time_s")
+    inside = (time_s >= 1.0 - 1e-9) & (time_s < 2.0 - 1e-9)
+    assert np.isnan(pitch_rate[inside]).all() and inside.sum() == 20
+    assert np.isfinite(pitch_rate[~inside]).all()
+    assert np.isfinite(
+        np.delete(column(samples, "state"), STATE_CHANNELS.index("pitch_rate"), 1)
+    ).all()
+
+
+def test_sensor_rate_must_divide_the_simulation_rate(default_scenario):
+    with pytest.raises(ValueError, match="must divide the simulation rate"):
+        Simulation(default_scenario, sensor_rate_hz=7.0)
