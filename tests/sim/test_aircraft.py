@@ -105,3 +105,43 @@ def test_lift_loss_scales_that_wings_lift_as_design_md_defines(trimmed):
     wing_lift_lbf = fdm["aero/qbar-psf"] * fdm["metrics/Sw-sqft"] * fdm["aero/cl-wing"]
     set_faults(fdm, dict.fromkeys(FAULT_NAMES, 0.0))
     assert faulty_lbf == pytest.approx(wing_lift_lbf * (0.5 * 0.9 + 0.5 * 0.7), rel=1e-12)
+
+
+def moment_of_surface(fdm, command, moment, fault, fault_pct):
+    """The change of an aerodynamic moment [lbf ft] when a surface command goes 0 -> 0.2."""
+    set_faults(fdm, {fault: fault_pct})
+    values = []
+    for value in (0.0, 0.2):
+        fdm[command] = value
+        fdm.run_ic()
+        fdm.run_ic()  # once more, so that alpha-dot follows the same accelerations
+        values.append(fdm[moment])
+    set_faults(fdm, {fault: 0.0})
+    fdm[command] = 0.0
+    return values[1] - values[0]
+
+
+@pytest.mark.parametrize(
+    ("fault", "command", "moment"),
+    [
+        ("aileron_effectiveness_loss", "fcs/aileron-cmd-norm", "moments/l-aero-lbsft"),
+        ("pitch_moment", "fcs/elevator-cmd-norm", "moments/m-aero-lbsft"),
+    ],
+)
+def test_control_faults_scale_their_surface_moments(trimmed, fault, command, moment):
+    fdm, _ = trimmed
+    healthy = moment_of_surface(fdm, command, moment, fault, 0.0)
+    faulty = moment_of_surface(fdm, command, moment, fault, 40.0)
+    print(f"{fault} 40 %: surface moment {healthy:.4f} -> {faulty:.4f} lbf ft")
+    assert faulty / healthy == pytest.approx(0.6, rel=0.02)
+
+
+def test_propulsion_loss_takes_its_share_of_the_thrust(trimmed):
+    fdm, _ = trimmed
+    set_faults(fdm, {"propulsion_loss": 20.0})
+    fdm.run()
+    fdm.run()  # the FCS computes the loss from the thrust of the step before
+    loss_lbf = fdm["external_reactions/propulsion_loss/magnitude"]
+    thrust_lbf = fdm["propulsion/engine/thrust-lbs"]
+    set_faults(fdm, {"propulsion_loss": 0.0})
+    assert loss_lbf == pytest.approx(0.2 * thrust_lbf, rel=1e-3)
