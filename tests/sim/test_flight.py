@@ -27,19 +27,21 @@ def test_trim_holds_level_flight_for_60_s_in_calm_air(default_scenario):
     assert np.abs(airspeed_error_mps).max() <= 1.0
 
 
-def test_default_loop_is_flown_in_its_wind(default_scenario, default_flight):
-    position = column(default_flight, "position_ne_m")
-    time_s = column(default_flight, "time_s")
-    for waypoint in default_scenario.waypoints_ne_m:
-        closest_m = np.hypot(*(position - waypoint).T).min()
-        print(f"waypoint {waypoint}: passed at {closest_m:.1f} m")
-        assert closest_m <= 100.0
-    altitude_error_m = (
-        column(default_flight, "state", ALTITUDE) - default_scenario.initial.altitude_m
+def loop_errors(scenario, samples) -> tuple[np.ndarray, float]:
+    """Closest pass [m] of each waypoint, and the largest altitude error [m] after 30 s."""
+    position = column(samples, "position_ne_m")
+    closest_m = np.array(
+        [np.hypot(*(position - waypoint).T).min() for waypoint in scenario.waypoints_ne_m]
     )
-    worst_m = np.abs(altitude_error_m[time_s >= 30.0]).max()
-    print(f"largest altitude error after 30 s: {worst_m:.1f} m")
-    assert worst_m <= 30.0
+    altitude_error_m = column(samples, "state", ALTITUDE) - scenario.initial.altitude_m
+    after_30_s = column(samples, "time_s") >= 30.0
+    return closest_m, float(np.abs(altitude_error_m[after_30_s]).max())
+
+
+def test_default_loop_is_flown_in_its_wind(default_scenario, default_flight):
+    closest_m, worst_m = loop_errors(default_scenario, default_flight)
+    print(f"default: waypoints passed at {closest_m.round(1)} m, altitude error {worst_m:.1f} m")
+    assert closest_m.max() <= 100.0 and worst_m <= 30.0
     assert all(np.isfinite(sample.state).all() for sample in default_flight)
 
 
@@ -52,17 +54,9 @@ def test_loop_is_flown_in_wind_of_25_percent_of_airspeed(default_scenario):
         east_mps=0.6 * 0.25 * airspeed_mps,
     )
     samples = fly(dataclasses.replace(default_scenario, wind=wind, seed=11))
-    position = column(samples, "position_ne_m")
-    closest_m = [
-        np.hypot(*(position - waypoint).T).min() for waypoint in default_scenario.waypoints_ne_m
-    ]
-    time_s = column(samples, "time_s")
-    altitude_error_m = column(samples, "state", ALTITUDE) - default_scenario.initial.altitude_m
-    worst_m = np.abs(altitude_error_m[time_s >= 30.0]).max()
-    print(
-        f"wind 25 %: waypoints passed at {np.round(closest_m, 1)} m, altitude error {worst_m:.1f} m"
-    )
-    assert max(closest_m) <= 100.0 and worst_m <= 30.0
+    closest_m, worst_m = loop_errors(default_scenario, samples)
+    print(f"wind 25 %: waypoints passed at {closest_m.round(1)} m, altitude error {worst_m:.1f} m")
+    assert closest_m.max() <= 100.0 and worst_m <= 30.0
 
 
 def test_wind_is_20_to_25_percent_of_airspeed_with_turbulence(default_scenario, default_flight):

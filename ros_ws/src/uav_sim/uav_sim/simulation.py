@@ -101,7 +101,7 @@ class Simulation:
         self._latest = self._sample()
 
     def _start(self) -> Trim:
-        """Initial condition, trim in the background wind, engine running, turbulence on."""
+        """Trim in calm air, start in the background wind, spin the engine up, turbulence on."""
         initial = self.scenario.initial
         fdm = self.fdm
         fdm["ic/lat-geod-deg"] = initial.latitude_deg
