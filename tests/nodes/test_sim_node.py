@@ -5,13 +5,11 @@ from __future__ import annotations
 import subprocess
 
 import pytest
-import yaml
 from helpers.processes import ros2_run_argv
 from rosgraph_msgs.msg import Clock
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
 from uav_sim.messages import stamp_seconds
 from uav_sim.node_tools import STREAM_QOS
-from uav_sim.scenario import default_scenario_path
 
 pytestmark = pytest.mark.integration
 
@@ -25,22 +23,6 @@ STREAMS = {
 }
 
 
-@pytest.fixture
-def short_scenario(tmp_path):
-    """The default scenario cut to DURATION_S."""
-    scenario = yaml.safe_load(default_scenario_path().read_text())
-    scenario["duration_s"] = DURATION_S
-    path = tmp_path / "short.yaml"
-    path.write_text(yaml.safe_dump(scenario))
-    return path
-
-
-@pytest.fixture
-def graph(ros_graph):
-    yield ros_graph
-    ros_graph.unsubscribe_all()
-
-
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("real_time_factor", [5.0, 0.0], ids=["paced", "as-fast-as-acked"])
 def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
@@ -48,13 +30,14 @@ def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
 ):
     received = graph.subscribe(STREAMS, STREAM_QOS)
     clock = graph.subscribe({"/clock": Clock})["/clock"]
+    scenario = short_scenario(DURATION_S)
     sim = start_process(
         ros2_run_argv(
             "uav_sim",
             "sim_node",
             ros_args=[
                 "-p",
-                f"scenario:={short_scenario}",
+                f"scenario:={scenario}",
                 "-p",
                 f"sensor_rate_hz:={RATE_HZ}",
                 "-p",

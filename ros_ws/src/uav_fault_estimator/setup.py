@@ -1,8 +1,11 @@
 """Build description of uav_fault_estimator: Python modules and node configuration."""
 
+from pathlib import Path
+
 from setuptools import find_packages, setup
 
 PACKAGE = "uav_fault_estimator"
+HERE = Path(__file__).parent
 
 setup(
     name=PACKAGE,
@@ -11,6 +14,8 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/config",
+         [str(path.relative_to(HERE)) for path in sorted((HERE / "config").glob("*.yaml"))]),
     ],
     install_requires=["setuptools"],
     zip_safe=True,
@@ -18,5 +23,7 @@ setup(
     maintainer_email="maintainers@uav-fault-diagnostics.example.org",
     description="Residuals, fault sensitivities, MHE fault estimation and detection for the UAV.",
     license="Apache-2.0",
-    entry_points={"console_scripts": []},
+    entry_points={
+        "console_scripts": [f"residual_node = {PACKAGE}.residual_node:main"],
+    },
 )

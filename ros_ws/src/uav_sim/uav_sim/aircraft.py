@@ -8,8 +8,10 @@ from __future__ import annotations
 import os
 
 import jsbsim
+import numpy as np
 
 from uav_sim.paths import jsbsim_root
+from uav_sim.propeller import PropellerForces
 
 MODEL = "aerosonde"
 # 480 Hz: JSBSim's explicit propeller-speed update diverges at 120 Hz when the propeller
@@ -33,6 +35,11 @@ FAULT_PROPERTY = "fault/{name}-pct"
 MODEL_THRUST_LBF = "external_reactions/propeller_model/magnitude"
 MODEL_MOMENT_LBFFT = "external_reactions/propeller_model/magnitude-lbsft"
 MODEL_MOMENT_AXIS = tuple(f"external_reactions/propeller_model/{axis}" for axis in "lmn")
+# 1: JSBSim's engine and propeller fly; 0: they are off and the propeller_model reactions
+# carry the propeller (run_ic() never advances JSBSim's propeller speed).
+JSBSIM_ENGINE_ON = "propulsion/jsbsim-engine-on"
+EFFECTIVE_THROTTLE = "fcs/throttle-effective-norm"
+FUEL_LOADED_LBS = "propulsion/fuel-loaded-lbs"
 
 BODY_ACCELERATIONS = (
     "accelerations/udot-ft_sec2",
@@ -59,3 +66,17 @@ def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
     """Seed faults [%] by name into the aircraft's fault properties."""
     for name, value_pct in faults_pct.items():
         fdm[FAULT_PROPERTY.format(name=name)] = value_pct
+
+
+def apply_propeller_model(fdm: jsbsim.FGFDMExec, forces: PropellerForces) -> None:
+    """Put a propeller force and moment on the aircraft's `propeller_model` reactions."""
+    fdm[MODEL_THRUST_LBF] = forces.thrust_n / N_PER_LBF
+    magnitude_nm = float(np.linalg.norm(forces.moment_nm))
+    fdm[MODEL_MOMENT_LBFFT] = magnitude_nm / NM_PER_LBFFT
+    axis = forces.moment_nm / magnitude_nm if magnitude_nm > 0 else np.array([1.0, 0.0, 0.0])
+    for name, component in zip(MODEL_MOMENT_AXIS, axis, strict=True):
+        fdm[name] = float(component)
+
+
+def clear_propeller_model(fdm: jsbsim.FGFDMExec) -> None:
+    apply_propeller_model(fdm, PropellerForces(0.0, np.zeros(3)))

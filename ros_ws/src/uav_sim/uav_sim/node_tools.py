@@ -3,14 +3,18 @@ descriptors from the package's config YAML, and a /diagnostics publisher."""
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
+import rclpy
 import yaml
 from ament_index_python.packages import get_package_share_directory
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -76,3 +80,34 @@ class Diagnostics:
         array = DiagnosticArray(status=[self._status])
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)
+
+
+NodeType = TypeVar("NodeType", bound=Node)
+
+
+def run_node(
+    name: str,
+    make_node: Callable[[], NodeType],
+    run: Callable[[NodeType], None] = rclpy.spin,
+    args: list[str] | None = None,
+) -> int:
+    """A node's main: init, make the node, run it, shut down; the exit status.
+
+    A ValueError while making or running it (a bad parameter or scenario) ends the process
+    with one line on stderr and status 1; Ctrl-C (SIGINT) or an external shutdown, with 0.
+    """
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = make_node()
+        run(node)
+        return 0
+    except ValueError as error:
+        print(f"{name}: {error}", file=sys.stderr)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        return 0
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()

@@ -13,7 +13,6 @@ import sys
 import time
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
@@ -26,7 +25,15 @@ from uav_sim.messages import (
     state_message,
     wind_message,
 )
-from uav_sim.node_tools import CLOCK_QOS, OK, STREAM_QOS, WARN, Diagnostics, declare_parameters
+from uav_sim.node_tools import (
+    CLOCK_QOS,
+    OK,
+    STREAM_QOS,
+    WARN,
+    Diagnostics,
+    declare_parameters,
+    run_node,
+)
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 
@@ -34,9 +41,10 @@ PARAMETERS = {
     "scenario": "scenario YAML file; empty for the shipped default scenario",
     "sensor_rate_hz": "rate of every published stream and of /clock [Hz]",
     "real_time_factor": "simulated seconds per wall second; 0: as fast as subscribers keep up",
-    "wait_for_subscribers": "start once the state topic has this many subscriptions",
+    "wait_for_subscribers": "start once state has this many subscriptions and discovery settled",
 }
 ACK_TIMEOUT_S = 10.0
+DISCOVERY_SETTLE_S = 0.5  # wall time with unchanged subscription counts before flying
 # Fast mode waits for acknowledgement every this many samples; in between, the reliable
 # keep-all writers hold what is not yet acknowledged, so nothing is lost.
 ACK_EVERY_SAMPLES = 10
@@ -89,10 +97,22 @@ class SimNode(Node):
             publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT_S))
 
     def wait_for_subscribers(self) -> None:
+        """Wait for the wanted subscriptions of `state`, then for discovery to settle.
+
+        A subscriber's other topics may be matched a moment after its `state`: the flight
+        starts once no stream's subscription count has changed for DISCOVERY_SETTLE_S.
+        """
         wanted = self.parameters["wait_for_subscribers"]
-        if wanted > 0:
-            self.get_logger().info(f"waiting for {wanted} subscription(s) of state")
+        if wanted <= 0:
+            return
+        self.get_logger().info(f"waiting for {wanted} subscription(s) of state")
         while rclpy.ok() and self.state_publisher.get_subscription_count() < wanted:
+            rclpy.spin_once(self, timeout_sec=0.05)
+        counts, settled_at = None, time.monotonic()
+        while rclpy.ok() and time.monotonic() - settled_at < DISCOVERY_SETTLE_S:
+            latest = [publisher.get_subscription_count() for publisher in self.stream_publishers]
+            if latest != counts:
+                counts, settled_at = latest, time.monotonic()
             rclpy.spin_once(self, timeout_sec=0.05)
 
     def fly(self) -> None:
@@ -133,23 +153,13 @@ class SimNode(Node):
             self.diagnostics.update(OK, "flying", values)
 
 
+def fly(node: SimNode) -> None:
+    node.wait_for_subscribers()
+    node.fly()
+
+
 def main(args: list[str] | None = None) -> int:
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = SimNode()
-        node.wait_for_subscribers()
-        node.fly()
-        return 0
-    except ValueError as error:  # a bad scenario (ScenarioError) or parameter
-        print(f"sim_node: {error}", file=sys.stderr)
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        return 0
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    return run_node("sim_node", SimNode, fly, args)
 
 
 if __name__ == "__main__":

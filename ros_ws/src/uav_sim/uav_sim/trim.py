@@ -16,17 +16,16 @@ import numpy as np
 from scipy.optimize import root
 
 from uav_sim.aircraft import (
+    EFFECTIVE_THROTTLE,
+    JSBSIM_ENGINE_ON,
     KG_PER_M3_PER_SLUG_PER_FT3,
     M_PER_FT,
-    MODEL_MOMENT_AXIS,
-    MODEL_MOMENT_LBFFT,
-    MODEL_THRUST_LBF,
-    N_PER_LBF,
-    NM_PER_LBFFT,
     SURFACE_LIMIT_RAD,
+    apply_propeller_model,
+    clear_propeller_model,
 )
 from uav_sim.frames import ned_to_body
-from uav_sim.propeller import Propeller, PropellerForces
+from uav_sim.propeller import Propeller
 
 TRIM_TOLERANCE = 1e-4  # on udot, wdot [m/s^2] and qdot [rad/s^2]: 0.1 m of drift in 45 s
 
@@ -42,26 +41,15 @@ class Trim:
     residual_accelerations: np.ndarray  # udot [m/s^2], wdot [m/s^2], qdot [rad/s^2]
 
 
-def apply_propeller_model(fdm: jsbsim.FGFDMExec, forces: PropellerForces) -> None:
-    """Put a propeller force and moment on the aircraft's `propeller_model` reactions."""
-    fdm[MODEL_THRUST_LBF] = forces.thrust_n / N_PER_LBF
-    magnitude_nm = float(np.linalg.norm(forces.moment_nm))
-    fdm[MODEL_MOMENT_LBFFT] = magnitude_nm / NM_PER_LBFFT
-    axis = forces.moment_nm / magnitude_nm if magnitude_nm > 0 else np.array([1.0, 0.0, 0.0])
-    for name, component in zip(MODEL_MOMENT_AXIS, axis, strict=True):
-        fdm[name] = float(component)
-
-
-def clear_propeller_model(fdm: jsbsim.FGFDMExec) -> None:
-    apply_propeller_model(fdm, PropellerForces(0.0, np.zeros(3)))
-
-
 def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, propeller: Propeller) -> Trim:
     """Trim in calm air at the position and altitude already in fdm's ic/ properties.
 
     The equilibrium is air-relative, so it holds in any steady uniform wind too (see
     `start_trimmed`). Leaves fdm's controls at the trim and the propeller model cleared.
+    JSBSim's own engine is off while the trim evaluates (its propeller does not turn in
+    run_ic()); the propeller model carries the propeller instead, as in the prediction model.
     """
+    fdm[JSBSIM_ENGINE_ON] = 0
     fdm["ic/vt-fps"] = airspeed_mps / M_PER_FT
     fdm["ic/beta-rad"] = 0.0
     fdm["ic/phi-rad"] = 0.0
@@ -79,7 +67,7 @@ def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, propeller: Pro
         fdm.run_ic()
         density = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
         axial_speed_mps = fdm["velocities/u-aero-fps"] * M_PER_FT
-        effective_throttle = fdm["fcs/throttle-pos-norm"]
+        effective_throttle = fdm[EFFECTIVE_THROTTLE]
         engine_rpm = propeller.steady_rpm(effective_throttle, axial_speed_mps, density)
         apply_propeller_model(
             fdm,
@@ -100,11 +88,12 @@ def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, propeller: Pro
         accelerations, x0=np.array([0.05, 0.0, 0.5]), method="hybr", options={"eps": 1e-10}
     )
     residual = accelerations(solution.x)
+    clear_propeller_model(fdm)
+    fdm[JSBSIM_ENGINE_ON] = 1
     if not np.all(np.abs(residual) < TRIM_TOLERANCE):
         raise RuntimeError(
             f"no straight and level trim at {airspeed_mps:g} m/s: accelerations {residual}"
         )
-    clear_propeller_model(fdm)
     alpha_rad, elevator_rad, throttle = solution.x
     return Trim(float(alpha_rad), float(elevator_rad), float(throttle), engine_rpm, residual)
 

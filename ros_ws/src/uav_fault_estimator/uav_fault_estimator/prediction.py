@@ -1,0 +1,132 @@
+"""The prediction model phi: the Aerosonde's accelerations at a measured state.
+
+Embedded-estimation paper, eq. 6: a_hat = phi(p, v, u, zeta, w_hat | f). The model is the
+JSBSim Aerosonde the simulator flies (uav_sim's aircraft definition, DESIGN.md's one source
+of truth), evaluated with `run_ic()`, which computes the accelerations of a given state
+without integrating. Per evaluation:
+
+- Wind: the filtered wind w_hat enters through the air-relative velocity. The predictor
+  flies in still air with body velocity C_bn (v_ned - w_hat), because run_ic() resets the
+  wind to the initial-condition wind; turbulence stays off (../shared/AEROSONDE.md).
+- Propeller: JSBSim's engine is switched off (`propulsion/jsbsim-engine-on` = 0): its
+  propeller speed is a state run_ic() never advances. The thrust and hub moment at the
+  measured engine speed come from the same propeller tables (uav_sim.propeller) and act
+  through the aircraft's `propeller_model` reactions.
+- Mass: the fuel on board is the measured fuel mass.
+- run_ic() runs twice: the first gives air density and effective throttle for the
+  propeller, and the accelerations from which JSBSim forms alpha-dot in the second.
+
+Output: (dv_N/dt, dv_E/dt, dv_D/dt) [m/s^2], the rate of change of the NED velocity, and
+(dp/dt, dq/dt, dr/dt) [rad/s^2] about body axes. JSBSim gives the body-axis derivative of
+the body velocity, so dv_ned/dt = C_bn^T (d(u, v, w)/dt + omega x (u, v, w)). In a steady
+wind the air-relative and ground velocities change alike; the filtered wind's own rate
+(time constant 10 s) is left out.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import jsbsim
+import numpy as np
+from uav_sim.aircraft import (
+    BODY_ACCELERATIONS,
+    EFFECTIVE_THROTTLE,
+    FLAP_LIMIT_RAD,
+    FUEL_LOADED_LBS,
+    JSBSIM_ENGINE_ON,
+    KG_PER_LB,
+    KG_PER_M3_PER_SLUG_PER_FT3,
+    M_PER_FT,
+    SURFACE_LIMIT_RAD,
+    apply_propeller_model,
+    create_fdm,
+    set_faults,
+)
+from uav_sim.channels import CONTROL_CHANNELS, FAULT_NAMES, STATE_CHANNELS
+from uav_sim.frames import ned_to_body
+from uav_sim.propeller import Propeller
+
+from uav_fault_estimator.residuals import PredictorFactory
+
+_STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
+_CONTROL = {name: index for index, name in enumerate(CONTROL_CHANNELS)}
+_VELOCITY_NED = [_STATE[name] for name in ("velocity_north", "velocity_east", "velocity_down")]
+_BODY_RATES = [_STATE[name] for name in ("roll_rate", "pitch_rate", "yaw_rate")]
+# Control channel -> (JSBSim command, measured value per unit command). Surfaces follow their
+# commands without lag in the aircraft's FCS, so the measured position gives the command.
+_COMMANDS = {
+    "flap": ("fcs/flap-cmd-norm", FLAP_LIMIT_RAD),
+    "elevator": ("fcs/elevator-cmd-norm", SURFACE_LIMIT_RAD),
+    "aileron": ("fcs/aileron-cmd-norm", SURFACE_LIMIT_RAD),
+    "rudder": ("fcs/rudder-cmd-norm", SURFACE_LIMIT_RAD),
+    "throttle": ("fcs/throttle-cmd-norm", 1.0),
+    "mixture": ("fcs/mixture-cmd-norm", 1.0),
+    "ignition": ("fcs/ignition-cmd", 1.0),
+}
+_POSITION_AND_ATTITUDE = {
+    "latitude": ("ic/lat-geod-rad", 1.0),
+    "longitude": ("ic/long-gc-rad", 1.0),
+    "altitude": ("ic/h-sl-ft", M_PER_FT),
+    "roll": ("ic/phi-rad", 1.0),
+    "pitch": ("ic/theta-rad", 1.0),
+    "yaw": ("ic/psi-true-rad", 1.0),
+}
+
+
+class AircraftPredictor:
+    """phi(x | f) for one fixed fault vector f: a JSBSim Aerosonde of its own."""
+
+    def __init__(self, faults_pct: Mapping[str, float], propeller: Propeller) -> None:
+        unknown = sorted(set(faults_pct) - set(FAULT_NAMES))
+        if unknown:
+            raise ValueError(f"unknown fault names {unknown}; known: {', '.join(FAULT_NAMES)}")
+        self.faults_pct = dict(faults_pct)
+        self.propeller = propeller
+        self.fdm: jsbsim.FGFDMExec = create_fdm()
+        self.fdm[JSBSIM_ENGINE_ON] = 0
+        set_faults(self.fdm, self.faults_pct)
+
+    def __call__(
+        self, state: np.ndarray, controls: np.ndarray, wind_ned_mps: np.ndarray
+    ) -> np.ndarray:
+        """Accelerations (6,) at state (14,), controls (7,) and filtered wind [m/s] (3,).
+
+        Orders and units are those of uav_sim.channels; the output is described in the
+        module docstring. Every input must be finite.
+        """
+        fdm = self.fdm
+        to_body = ned_to_body(*state[[_STATE["roll"], _STATE["pitch"], _STATE["yaw"]]])
+        air_velocity_body_mps = to_body @ (state[_VELOCITY_NED] - wind_ned_mps)
+        body_rates_radps = state[_BODY_RATES]
+        for channel, (name, unit) in _POSITION_AND_ATTITUDE.items():
+            fdm[name] = float(state[_STATE[channel]]) / unit
+        for axis, value_mps in zip("uvw", air_velocity_body_mps, strict=True):
+            fdm[f"ic/{axis}-fps"] = float(value_mps) / M_PER_FT
+        for axis, value_radps in zip("pqr", body_rates_radps, strict=True):
+            fdm[f"ic/{axis}-rad_sec"] = float(value_radps)
+        for channel, (name, unit) in _COMMANDS.items():
+            fdm[name] = float(controls[_CONTROL[channel]]) / unit
+        fdm[FUEL_LOADED_LBS] = float(state[_STATE["fuel_mass"]]) / KG_PER_LB
+        fdm.run_ic()
+        density_kg_m3 = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
+        propeller_forces = self.propeller.forces(
+            float(state[_STATE["engine_speed"]]),
+            fdm[EFFECTIVE_THROTTLE],
+            fdm["velocities/u-aero-fps"] * M_PER_FT,
+            density_kg_m3,
+            body_rates_radps,
+        )
+        apply_propeller_model(fdm, propeller_forces)
+        fdm.run_ic()
+        derivatives = np.array([fdm[name] for name in BODY_ACCELERATIONS])
+        velocity_rate_body = derivatives[:3] * M_PER_FT + np.cross(
+            body_rates_radps, air_velocity_body_mps
+        )
+        return np.concatenate([to_body.T @ velocity_rate_body, derivatives[3:]])
+
+
+def aircraft_predictor_factory() -> PredictorFactory:
+    """Makes AircraftPredictor copies that share one set of propeller tables."""
+    propeller = Propeller.from_aircraft()
+    return lambda faults_pct: AircraftPredictor(faults_pct, propeller)

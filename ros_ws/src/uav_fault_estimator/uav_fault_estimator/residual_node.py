@@ -1,0 +1,146 @@
+"""residual_node: acceleration residuals and fault sensitivities from the sensor streams.
+
+Subscribes `state`, `controls`, `wind/filtered` (matched by stamp); publishes `residuals`
+(Residuals) every update_period_s of sim time, and `/diagnostics`.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+from rclpy.node import Node
+from uav_fault_msgs.msg import AircraftState, ControlInputs, Residuals, WindEstimate
+from uav_sim.messages import controls_array, header, state_array, wind_array
+from uav_sim.node_tools import (
+    OK,
+    STREAM_QOS,
+    WARN,
+    Diagnostics,
+    declare_parameters,
+    run_node,
+)
+
+from uav_fault_estimator.prediction import aircraft_predictor_factory
+from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, ResidualGenerator, ResidualSample
+from uav_fault_estimator.stamp_matching import StampMatcher
+
+PARAMETERS = {
+    "fault_names": "faults whose sensitivities are computed: the columns of S",
+    "secant_step_pct": "secant step s of the sensitivity, eq. 8 / 15 [%]",
+    "tau_a_s": "time constant of the smoothing filter F_a, eq. 5-6 [s]",
+    "update_period_s": "residuals are published every this much simulation time [s]",
+    "sensitivity_period_s": "S is recomputed every this much simulation time [s]",
+    "recovery_s": "rows stay invalid this long after a missing channel is back [s]",
+}
+# Subscribed in this order: sim_node's wait_for_subscribers counts the subscriptions of
+# `state`, so state comes last, when the others exist already.
+STREAMS = {"controls": ControlInputs, "wind/filtered": WindEstimate, "state": AircraftState}
+# Stamps within this fraction of a period of the publication grid count as on it.
+STAMP_TOLERANCE = 1e-6
+TO_ARRAY = {"state": state_array, "controls": controls_array, "wind/filtered": wind_array}
+
+
+class ResidualNode(Node):
+    """Thin adapter: messages matched by stamp, one core update per sample, publication."""
+
+    def __init__(self) -> None:
+        super().__init__("residual_node")
+        self.parameters = declare_parameters(
+            self, "uav_fault_estimator", "residual_node.yaml", PARAMETERS
+        )
+        p = self.parameters
+        if not p["update_period_s"] > 0:
+            raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
+        self.generator = ResidualGenerator(
+            aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
+            p["sensitivity_period_s"], p["recovery_s"],
+        )
+        self.matcher = StampMatcher(tuple(STREAMS))
+        self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
+        for topic, message_type in STREAMS.items():
+            self.create_subscription(
+                message_type, topic, lambda message, topic=topic: self.on_message(topic, message),
+                STREAM_QOS,
+            )
+        self.diagnostics = Diagnostics(self)
+        self.next_publish_s: float | None = None
+        self.counts = {"samples": 0, "published": 0, "stamp_resets": 0, "rejected_samples": 0}
+        self.core_time_s = 0.0
+
+    def on_message(self, topic: str, message) -> None:
+        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        if self.matcher.is_backwards(stamp_ns):
+            self.get_logger().warning(
+                f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"
+                " the source restarted, filters reset"
+            )
+            self.matcher.reset()
+            self.generator.reset()
+            self.next_publish_s = None
+            self.counts["stamp_resets"] += 1
+        for sample_ns, payloads in self.matcher.add(topic, stamp_ns, TO_ARRAY[topic](message)):
+            self.process(sample_ns / 1e9, payloads)
+
+    def process(self, time_s: float, payloads: dict) -> None:
+        """One core update; publishes when the update period is due."""
+        started = time.perf_counter()
+        try:
+            sample = self.generator.update(
+                time_s, payloads["state"], payloads["controls"], payloads["wind/filtered"]
+            )
+        except ValueError as error:  # a sample the model cannot evaluate: skipped
+            self.counts["rejected_samples"] += 1
+            self.get_logger().warning(f"sample at {time_s:.3f} s skipped: {error}")
+            self.diagnostics.update(WARN, f"sample skipped: {error}", self.health())
+            return
+        finally:
+            self.core_time_s += time.perf_counter() - started
+        self.counts["samples"] += 1
+        if sample is None:
+            return
+        period_s = self.parameters["update_period_s"]
+        if self.next_publish_s is None:  # the first publication on the period's grid
+            self.next_publish_s = math.ceil(time_s / period_s - STAMP_TOLERANCE) * period_s
+        if time_s >= self.next_publish_s - STAMP_TOLERANCE * period_s:
+            self.publisher.publish(self.message(sample))
+            self.counts["published"] += 1
+            self.next_publish_s = (math.floor(time_s / period_s + STAMP_TOLERANCE) + 1) * period_s
+            self.report(sample)
+
+    def message(self, sample: ResidualSample) -> Residuals:
+        return Residuals(
+            header=header(sample.time_s),
+            residual=sample.residual.tolist(),
+            observed=sample.observed.tolist(),
+            predicted=sample.predicted.tolist(),
+            valid=sample.valid.tolist(),
+            fault_names=list(self.generator.fault_names),
+            sensitivity_per_pct=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
+        )
+
+    def health(self) -> dict[str, object]:
+        """Counters and cost for /diagnostics."""
+        return {
+            **self.counts,
+            "dropped_incomplete_samples": self.matcher.dropped_sets,
+            "core_ms_per_sample": f"{1e3 * self.core_time_s / max(self.counts['samples'], 1):.3f}",
+        }
+
+    def report(self, sample: ResidualSample) -> None:
+        invalid = [name for name, ok in zip(RESIDUAL_CHANNELS, sample.valid, strict=True)
+                   if not ok]
+        self.diagnostics.update(
+            WARN if invalid else OK,
+            "rows invalid (a state channel is missing): " + ", ".join(invalid)
+            if invalid else "residuals valid",
+            {**self.health(), "invalid_rows": ",".join(invalid) or "none"},
+        )
+
+def main(args: list[str] | None = None) -> int:
+    return run_node("residual_node", ResidualNode, args=args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,196 @@
+"""Prediction residuals and fault sensitivities from p + 1 copies of a prediction model.
+
+Embedded-estimation paper, section II (eq. 2-8); evolving-faults paper, eq. 15. Per sensor
+sample k, with dt_k = t_k - t_{k-1}:
+
+    observed   a_raw[k] = (v[k] - v[k-1]) / dt_k            exact mean of dv/dt on the interval
+    predicted  P[k] = [phi(x_k | 0), S_raw(t)]               (6, 1 + p); eq. 6 and eq. 8 / 15:
+               S_raw column j = (phi(x | s e_j) - phi(x | 0)) / s
+               Pm[k] = (P[k] + P[k-1]) / 2                   trapezoidal mean on the same interval
+    filtered   a = F_a a_raw,  [a_hat, S] = F_a Pm           eq. 5-6, F_a = 1/(tau_a s + 1)
+    residual   y = a - a_hat                                  eq. 2
+
+S is filtered exactly like a_hat: if the aircraft accelerates as phi(x | f) ~= phi(x | 0) +
+S_raw f, then y = F_a (a_raw - phi(x | 0)) ~= F_a (S_raw f) = (F_a S_raw) f for a slowly
+changing f, so the S for which y ~= S f holds is the filtered one.
+
+Frames: the model gives dv/dt of v = (NED ground velocity, body rates), so the linear rows
+are filtered in NED. The output expresses them in body axes (x forward, y right, z down),
+rotating y, a, a_hat and S's rows by the newest attitude: the same rotation on both sides
+keeps y ~= S f, and body axes make the signatures readable (lift: z, drag: x).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from uav_sim.channels import STATE_CHANNELS
+from uav_sim.filters import LowPass
+from uav_sim.frames import ned_to_body
+
+# phi(state (14,), controls (7,), filtered NED wind (3,)) -> (6,) [dv_ned/dt m/s^2, dpqr/dt rad/s^2]
+Prediction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+# A copy of the prediction model with the given faults [%] seeded into it.
+PredictorFactory = Callable[[Mapping[str, float]], Prediction]
+
+RESIDUAL_CHANNELS = (
+    "linear_x", "linear_y", "linear_z", "angular_x", "angular_y", "angular_z",
+)
+_INDEX = {name: index for index, name in enumerate(STATE_CHANNELS)}
+VELOCITY = [_INDEX[name] for name in ("velocity_north", "velocity_east", "velocity_down",
+                                      "roll_rate", "pitch_rate", "yaw_rate")]
+ATTITUDE = [_INDEX[name] for name in ("roll", "pitch", "yaw")]
+
+_AIR_DATA = ("velocity_north", "velocity_east", "velocity_down", "roll", "pitch", "yaw")
+# The state channels each residual row cannot do without: its observed derivative, the
+# rotation to body axes, and the model terms that dominate it (airspeed, alpha and beta come
+# from velocity and attitude; thrust from engine speed; damping from the rates). Slow
+# channels (position, altitude, fuel mass) and weak couplings are held at their last good
+# value while missing instead. Every row needs the controls and the wind ("controls" and
+# "wind" stand for all of their fields).
+_EVERY_ROW = {*_AIR_DATA, "controls", "wind"}
+ROW_NEEDS: tuple[frozenset[str], ...] = (
+    frozenset({*_EVERY_ROW, "engine_speed"}),
+    frozenset({*_EVERY_ROW, "engine_speed"}),
+    frozenset({*_EVERY_ROW, "engine_speed"}),
+    frozenset({*_EVERY_ROW, "roll_rate", "yaw_rate"}),
+    frozenset({*_EVERY_ROW, "pitch_rate"}),
+    frozenset({*_EVERY_ROW, "yaw_rate", "roll_rate"}),
+)
+
+
+@dataclass(frozen=True)
+class ResidualSample:
+    """Residuals at one sensor time; linear rows in body axes, per the module docstring."""
+
+    time_s: float
+    residual: np.ndarray      # (6,) y = a - a_hat [m/s^2 x3, rad/s^2 x3]
+    observed: np.ndarray      # (6,) a
+    predicted: np.ndarray     # (6,) a_hat
+    sensitivity: np.ndarray   # (6, p) S [unit of the row per % of fault]
+    valid: np.ndarray         # (6,) bool: the row's needed channels were all present
+
+
+class ResidualGenerator:
+    """Runs p + 1 model copies on every sensor sample and keeps the filtered residuals.
+
+    Inputs per sample: time [s], state (14,) in STATE_CHANNELS order with NaN for missing
+    channels, controls (7,), filtered NED wind [m/s] (3,); a non-finite value in controls
+    or wind makes them missing as a whole (their last good values are used meanwhile).
+    Sensitivities are recomputed every sensitivity_period_s and held in between. A row is
+    invalid for recovery_s after the start, while a channel it needs is missing, and for
+    recovery_s after the channel is back: the time its filters take to settle.
+    """
+
+    def __init__(
+        self,
+        predictor_factory: PredictorFactory,
+        fault_names: Sequence[str],
+        secant_step_pct: float,
+        tau_a_s: float,
+        sensitivity_period_s: float,
+        recovery_s: float,
+    ) -> None:
+        if not secant_step_pct > 0:
+            raise ValueError(f"secant step must be positive, got {secant_step_pct} %")
+        self.fault_names = tuple(fault_names)
+        self.secant_step_pct = secant_step_pct
+        self.sensitivity_period_s = sensitivity_period_s
+        self.recovery_s = recovery_s
+        self.nominal = predictor_factory({})
+        self.faulty = [predictor_factory({name: secant_step_pct}) for name in self.fault_names]
+        self.observed_filter = LowPass(tau_a_s)
+        self.predicted_filter = LowPass(tau_a_s)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget all history (a restarted source): the next sample starts afresh."""
+        self.observed_filter.reset()
+        self.predicted_filter.reset()
+        self.last_time_s: float | None = None
+        self.last_velocity: np.ndarray | None = None
+        self.last_prediction: np.ndarray | None = None
+        self.held_state = np.full(len(STATE_CHANNELS), np.nan)
+        self.held_inputs: dict[str, np.ndarray] = {}
+        self.raw_sensitivity: np.ndarray | None = None
+        self.next_sensitivity_s = -math.inf
+        self.row_invalid_until_s = np.full(6, math.inf)
+        self.latest: ResidualSample | None = None
+
+    def _prediction(self, state: np.ndarray, controls: np.ndarray, wind: np.ndarray,
+                    time_s: float) -> np.ndarray:
+        """P = [phi(x|0), S_raw] (6, 1 + p); S_raw recomputed when its period is due."""
+        nominal = np.asarray(self.nominal(state, controls, wind), dtype=float)
+        if time_s >= self.next_sensitivity_s or self.raw_sensitivity is None:
+            faulty = [np.asarray(model(state, controls, wind)) for model in self.faulty]
+            self.raw_sensitivity = (
+                np.column_stack(faulty) - nominal[:, None] if faulty else np.zeros((6, 0))
+            ) / self.secant_step_pct
+            self.next_sensitivity_s = time_s + self.sensitivity_period_s
+        prediction = np.column_stack([nominal, self.raw_sensitivity])
+        if not np.all(np.isfinite(prediction)):
+            self.raw_sensitivity = None  # recomputed at the next sample
+            raise ValueError("the prediction model gave non-finite accelerations")
+        return prediction
+
+    def _update_row_validity(self, missing: set[str], time_s: float) -> np.ndarray:
+        """Rows usable now; rows coming back from a dropout wait recovery_s."""
+        for row, needs in enumerate(ROW_NEEDS):
+            if needs & missing:
+                self.row_invalid_until_s[row] = math.inf
+            elif self.row_invalid_until_s[row] == math.inf:
+                self.row_invalid_until_s[row] = time_s + self.recovery_s
+        return self.row_invalid_until_s <= time_s
+
+    def update(self, time_s: float, state: np.ndarray, controls: np.ndarray,
+               wind_ned_mps: np.ndarray) -> ResidualSample | None:
+        """Process one sensor sample; the residuals at time_s, or None before any is formed.
+
+        Raises ValueError for a time that does not increase (call reset() first).
+        """
+        if self.last_time_s is not None and time_s <= self.last_time_s:
+            raise ValueError(f"time {time_s} s does not follow {self.last_time_s} s: reset first")
+        finite = np.isfinite(state)
+        missing = {name for name, ok in zip(STATE_CHANNELS, finite, strict=True) if not ok}
+        self.held_state = np.where(finite, state, self.held_state)
+        for name, value in (("controls", controls), ("wind", wind_ned_mps)):
+            if np.all(np.isfinite(value)):
+                self.held_inputs[name] = np.array(value, dtype=float)
+            else:
+                missing.add(name)
+        if not np.all(np.isfinite(self.held_state)) or len(self.held_inputs) < 2:
+            return None  # some input never seen yet: nothing can be predicted
+        state = self.held_state
+        prediction = self._prediction(
+            state, self.held_inputs["controls"], self.held_inputs["wind"], time_s
+        )
+        velocity = state[VELOCITY]
+        valid = self._update_row_validity(missing, time_s)
+        if self.last_time_s is not None:
+            dt_s = time_s - self.last_time_s
+            observed_raw = (velocity - self.last_velocity) / dt_s
+            predicted_mean = 0.5 * (prediction + self.last_prediction)
+            self.observed_filter.update(observed_raw, dt_s)
+            self.predicted_filter.update(predicted_mean, dt_s)
+            self.latest = self._sample(time_s, state, valid)
+        self.last_time_s, self.last_velocity, self.last_prediction = time_s, velocity, prediction
+        return self.latest
+
+    def _sample(self, time_s: float, state: np.ndarray, valid: np.ndarray) -> ResidualSample:
+        """The filtered quantities with their linear rows rotated to body axes."""
+        rotation = np.eye(6)
+        rotation[:3, :3] = ned_to_body(*state[ATTITUDE])
+        observed = rotation @ self.observed_filter.output
+        predicted_and_s = rotation @ self.predicted_filter.output
+        predicted = predicted_and_s[:, 0]
+        return ResidualSample(
+            time_s=time_s,
+            residual=observed - predicted,
+            observed=observed,
+            predicted=predicted,
+            sensitivity=predicted_and_s[:, 1:].copy(),
+            valid=valid.copy(),
+        )
