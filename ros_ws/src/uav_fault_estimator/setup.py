@@ -24,6 +24,9 @@ setup(
     description="Residuals, fault sensitivities, MHE fault estimation and detection for the UAV.",
     license="Apache-2.0",
     entry_points={
-        "console_scripts": [f"residual_node = {PACKAGE}.residual_node:main"],
+        "console_scripts": [
+            f"residual_node = {PACKAGE}.residual_node:main",
+            f"mhe_node = {PACKAGE}.mhe_node:main",
+        ],
     },
 )

@@ -1,0 +1,95 @@
+"""Batch MAP fault estimator: all data so far (evolving-faults paper, section VI).
+
+Faults are constant within each update cycle of M samples, f(t) = F(tau) for
+M (tau - 1) < t <= M tau (eq. 16-18), so cycle tau's data term is the sum of its samples'
+normal equations, and the QP has one stage per cycle: the same WindowQP and fault models
+as the moving-horizon estimator, grown by one stage per completed cycle and warm-started
+from the previous cycle's solution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from uav_fault_estimator.estimator_config import EstimatorConfig
+from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveStatus
+from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
+
+
+@dataclass(frozen=True)
+class BatchEstimate:
+    """F_tau (tau, p): the estimate of every completed cycle, oldest first [%]."""
+
+    cycles_pct: np.ndarray
+    status: SolveStatus
+    iterations: int
+
+
+class BatchEstimator:
+    """Accumulates residual samples into cycles of `cycle_samples` and solves on demand."""
+
+    def __init__(self, config: EstimatorConfig, cycle_samples: int) -> None:
+        config.validate()
+        if cycle_samples < 1:
+            raise ValueError(f"an update cycle needs at least one sample, got {cycle_samples}")
+        self.config = config
+        self.cycle_samples = cycle_samples
+        p = len(config.faults)
+        self._gram: list[np.ndarray] = []      # per completed cycle (p, p)
+        self._linear: list[np.ndarray] = []    # per completed cycle (p,)
+        self._open = (np.zeros((p, p)), np.zeros(p), 0)
+        self._last = BatchEstimate(np.zeros((0, p)), SolveStatus.WAITING, 0)
+
+    @property
+    def cycles(self) -> int:
+        """Completed update cycles."""
+        return len(self._gram)
+
+    def add(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None) -> None:
+        """One residual sample: y (m,), s (m, p) [unit / %], valid (m,) rows to use.
+
+        Non-finite rows are left out like invalid ones.
+        """
+        y, s = np.asarray(y, dtype=float), np.asarray(s, dtype=float)
+        keep = np.ones(y.shape, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+        finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
+        weight = np.where(keep & finite, self.config.q_inv, 0.0)
+        gram, linear = stage_normal_equations(
+            np.where(finite, y, 0.0)[None], np.where(finite[:, None], s, 0.0)[None], weight[None]
+        )
+        open_gram, open_linear, count = self._open
+        self._open = (open_gram + gram[0], open_linear + linear[0], count + 1)
+        if count + 1 == self.cycle_samples:
+            self._gram.append(self._open[0])
+            self._linear.append(self._open[1])
+            p = len(self.config.faults)
+            self._open = (np.zeros((p, p)), np.zeros(p), 0)
+
+    def estimate(self) -> BatchEstimate:
+        """Solve over every completed cycle; the last good estimate if the solve fails."""
+        if not self._gram:
+            return self._last
+        config = self.config
+        problem = WindowQP(
+            self.cycles,
+            [fault.build_model() for fault in config.faults],
+            [(fault.lower_pct, fault.upper_pct) for fault in config.faults],
+            config.r_inv,
+        )
+        problem.set_data(np.array(self._gram), np.array(self._linear), config.prior_pct)
+        guess = np.zeros(problem.n_variables)
+        previous = self._last.cycles_pct
+        guess[problem.f_index] = config.prior_pct
+        guess[problem.f_index[: len(previous)]] = previous
+        if len(previous):
+            guess[problem.f_index[len(previous):]] = previous[-1]
+        outcome = ProxQPSolver(problem, config.solver).solve(
+            guess, np.zeros(problem.b.size), np.zeros(problem.l.size)
+        )
+        if outcome.status is SolveStatus.SOLVED:
+            self._last = BatchEstimate(outcome.x[problem.f_index], outcome.status,
+                                       outcome.iterations)
+            return self._last
+        return BatchEstimate(self._last.cycles_pct, outcome.status, outcome.iterations)

@@ -1,0 +1,132 @@
+"""Plain configuration of the fault estimators (read by the ROS node from YAML)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from uav_sim.channels import PAPER_FAULT_NAMES
+
+from uav_fault_estimator.fault_models import SCALE_PARAMETER, FaultModel, make_model
+
+
+@dataclass
+class FaultConfig:
+    """One estimated fault: its name, evolution model and bounds.
+
+    model: a name in fault_models.MODEL_CLASSES; params: that model's parameters
+    (e.g. lambda_pct for "monotonic"); lower_pct / upper_pct: bounds on f [%];
+    prior_pct: f before any data [%].
+    """
+
+    name: str
+    model: str = "monotonic"
+    params: dict[str, Any] = field(default_factory=lambda: {"lambda_pct": 0.5})
+    lower_pct: float = -math.inf
+    upper_pct: float = math.inf
+    prior_pct: float = 0.0
+
+    def build_model(self) -> FaultModel:
+        """The fault model this entry names (ValueError naming the fault if wrong)."""
+        if self.lower_pct > self.upper_pct:
+            raise ValueError(f"fault {self.name}: lower_pct > upper_pct")
+        try:
+            return make_model(self.model, **self.params)
+        except ValueError as error:
+            raise ValueError(f"fault {self.name}: {error}") from None
+
+
+@dataclass
+class SolverSettings:
+    """ProxSuite settings: absolute/relative KKT tolerances and the iteration cap."""
+
+    eps_abs: float = 1e-6
+    eps_rel: float = 0.0
+    max_iter: int = 200
+
+
+@dataclass
+class EstimatorConfig:
+    """Moving-horizon / batch MAP estimator parameters.
+
+    horizon: N samples in the window; q_diag: residual noise variances Q (one per
+    residual channel) [residual unit²]; r_diag_pct2: handover covariance R (one per
+    fault) [%²]; faults: the estimated faults; solver: ProxSuite settings.
+    Defaults: the embedded UAV paper's setting, N = 50, four monotonic increasing faults.
+    """
+
+    horizon: int = 50
+    q_diag: tuple[float, ...] = (1e-2, 1e-2, 1e-2, 1e-4, 1e-4, 1e-4)
+    r_diag_pct2: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
+    faults: list[FaultConfig] = field(
+        default_factory=lambda: [FaultConfig(name) for name in PAPER_FAULT_NAMES]
+    )
+    solver: SolverSettings = field(default_factory=SolverSettings)
+
+    def validate(self) -> None:
+        """Raise ValueError naming the first inconsistent parameter."""
+        if self.horizon < 2:
+            raise ValueError(f"horizon must be at least 2, got {self.horizon}")
+        if len(self.r_diag_pct2) != len(self.faults):
+            raise ValueError("r_diag_pct2 needs one entry per fault")
+        for name, values in (("q_diag", self.q_diag), ("r_diag_pct2", self.r_diag_pct2)):
+            if not all(math.isfinite(v) and v > 0 for v in values):
+                raise ValueError(f"{name} entries must be positive and finite")
+        for fault in self.faults:
+            fault.build_model()
+
+    @property
+    def q_inv(self) -> np.ndarray:
+        """Q⁻¹ diagonal [1/residual unit²]."""
+        return 1.0 / np.asarray(self.q_diag, dtype=float)
+
+    @property
+    def r_inv(self) -> np.ndarray:
+        """R⁻¹ diagonal [1/%²]."""
+        return 1.0 / np.asarray(self.r_diag_pct2, dtype=float)
+
+    @property
+    def prior_pct(self) -> np.ndarray:
+        """The faults before any data [%]."""
+        return np.array([fault.prior_pct for fault in self.faults])
+
+
+def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> EstimatorConfig:
+    """The configuration from mhe_node's flat parameters (config/mhe_node.yaml), for
+    `channels` residual channels; ValueError naming the first wrong entry."""
+    names = list(parameters["fault_names"])
+    per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
+                 "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2")
+    for key in per_fault:
+        if len(parameters[key]) != len(names):
+            raise ValueError(f"{key} has {len(parameters[key])} entries for {len(names)} faults")
+    faults = []
+    for k, name in enumerate(names):
+        model = parameters["fault_models"][k]
+        if model not in SCALE_PARAMETER:
+            raise ValueError(f"fault {name}: unknown model '{model}', known: "
+                             + ", ".join(SCALE_PARAMETER))
+        model_parameters: dict[str, float] = {}
+        if SCALE_PARAMETER[model] is not None:
+            model_parameters[SCALE_PARAMETER[model]] = parameters["fault_model_scales_pct"][k]
+        if model == "random_walk":
+            model_parameters["coefficient"] = parameters["fault_model_coefficients"][k]
+        faults.append(FaultConfig(
+            name, model, model_parameters, lower_pct=parameters["lower_bounds_pct"][k],
+            upper_pct=parameters["upper_bounds_pct"][k], prior_pct=parameters["prior_pct"][k],
+        ))
+    config = EstimatorConfig(
+        horizon=parameters["horizon"],
+        q_diag=tuple(parameters["residual_variances"]),
+        r_diag_pct2=tuple(parameters["handover_variances_pct2"]),
+        faults=faults,
+        solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
+                              max_iter=parameters["solver_max_iter"]),
+    )
+    if len(config.q_diag) != channels:
+        raise ValueError(f"residual_variances needs {channels} entries")
+    config.validate()
+    return config

@@ -1,0 +1,131 @@
+"""Moving-horizon MAP fault estimator (embedded UAV paper section III-C, EF section VII).
+
+Each `update` takes one residual sample y(t) ∈ R^m, its signature S(t) ∈ R^{mxp} and a
+per-channel validity, and returns the MAP estimate over the last N samples. The QP
+structure is built once; each update refills H and g in place and warm-starts ProxSuite
+from the previous solution shifted by one sample. Nothing raises into the caller: bad
+data or a failed solve keep the last good estimate and report the status.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from uav_fault_estimator.estimator_config import EstimatorConfig
+from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveOutcome, SolveStatus
+from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
+
+
+@dataclass
+class EstimateResult:
+    """Output of one update.
+
+    fault_pct (p,): estimate of f(t) [%]; window_pct (N, p): estimates over the window,
+    oldest first [%]; status; iterations of the solver; update_time_ms: the whole update
+    call [ms]; solver_time_ms: ProxSuite's own run time [ms] (0 when not solved).
+    """
+
+    fault_pct: np.ndarray
+    window_pct: np.ndarray
+    status: SolveStatus
+    iterations: int
+    update_time_ms: float
+    solver_time_ms: float
+
+
+class MovingHorizonEstimator:
+    """MAP estimator over a window of the last `config.horizon` residual samples."""
+
+    def __init__(self, config: EstimatorConfig) -> None:
+        config.validate()
+        self.config = config
+        n, m, p = config.horizon, len(config.q_diag), len(config.faults)
+        self.problem = WindowQP(
+            n,
+            [fault.build_model() for fault in config.faults],
+            [(fault.lower_pct, fault.upper_pct) for fault in config.faults],
+            config.r_inv,
+        )
+        self.solver = ProxQPSolver(self.problem, config.solver)
+        self._q_inv = config.q_inv
+        self._y = np.zeros((n, m))
+        self._s = np.zeros((n, m, p))
+        self._weight = np.zeros((n, m))
+        # The last good solution, shifted once per update: the warm start, and at stage 0
+        # the previous window's estimate of the new window's first point (UAV eq. 17).
+        self._x = np.zeros(self.problem.n_variables)
+        self._x[self.problem.f_index] = config.prior_pct
+        self._y_dual = np.zeros(self.problem.b.size)
+        self._z_dual = np.zeros(self.problem.l.size)
+        self._window_pct = np.tile(config.prior_pct, (n, 1))
+
+    def update(
+        self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None
+    ) -> EstimateResult:
+        """Add one sample and re-estimate.
+
+        Inputs: y (m,) residuals; s (m, p) signatures [residual unit / %]; valid (m,)
+        booleans, False for a channel lost at this sample (left out of the fit).
+        Returns the EstimateResult: WAITING (values = prior) while the window holds no
+        valid residual row; INVALID_DATA for non-finite or misshapen data on valid
+        channels. A window not yet full is solved with its empty samples weighted 0.
+        """
+        start = time.perf_counter()
+        sample_ok = self._push_sample(y, s, valid)
+        self._shift_guess()
+        if not sample_ok:
+            return self._result(SolveStatus.INVALID_DATA, None, start)
+        if not self._weight.any():  # no usable residual in the window yet
+            return self._result(SolveStatus.WAITING, None, start)
+        gram, linear = stage_normal_equations(self._y, self._s, self._weight)
+        self.problem.set_data(gram, linear, self._x[self.problem.f_index[0]])
+        outcome = self.solver.solve(self._x, self._y_dual, self._z_dual)
+        if outcome.status is SolveStatus.SOLVED:
+            self._x, self._y_dual, self._z_dual = outcome.x, outcome.y, outcome.z
+            self._window_pct = outcome.x[self.problem.f_index]
+        return self._result(outcome.status, outcome, start)
+
+    def _push_sample(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None) -> bool:
+        """Append the sample to the window, invalid or non-finite channels weighted 0.
+
+        Returns False when the sample is unusable (wrong shape, non-finite on a channel
+        marked valid); it then enters the window with all channels left out, so the next
+        updates are not poisoned by it.
+        """
+        m, p = self._s.shape[1:]
+        self._y[:-1] = self._y[1:]
+        self._s[:-1] = self._s[1:]
+        self._weight[:-1] = self._weight[1:]
+        y = np.asarray(y, dtype=float)
+        s = np.asarray(s, dtype=float)
+        keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+        if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
+            self._weight[-1] = 0.0
+            return False
+        finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
+        self._y[-1] = np.where(finite, y, 0.0)
+        self._s[-1] = np.where(finite[:, None], s, 0.0)
+        self._weight[-1] = np.where(keep & finite, self._q_inv, 0.0)
+        return bool(np.all(finite[keep]))
+
+    def _shift_guess(self) -> None:
+        """Move the last good solution one sample back in time (warm start, handover)."""
+        problem = self.problem
+        self._x = self._x[problem.x_shift]
+        self._y_dual = self._y_dual[problem.y_shift]
+        self._z_dual = self._z_dual[problem.z_shift]
+
+    def _result(
+        self, status: SolveStatus, outcome: SolveOutcome | None, start: float
+    ) -> EstimateResult:
+        return EstimateResult(
+            fault_pct=self._window_pct[-1].copy(),
+            window_pct=self._window_pct.copy(),
+            status=status,
+            iterations=outcome.iterations if outcome else 0,
+            update_time_ms=(time.perf_counter() - start) * 1e3,
+            solver_time_ms=outcome.solver_time_ms if outcome else 0.0,
+        )

@@ -1,0 +1,142 @@
+"""mhe_node: moving-horizon MAP fault estimates from the residual stream.
+
+Subscribes `residuals` (Residuals); publishes `faults/estimate` (FaultEstimate) on every
+residual, stamped with the residual's stamp, and solver figures on `/diagnostics`.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections import deque
+
+import numpy as np
+from rclpy.node import Node
+from uav_fault_msgs.msg import FaultEstimate, Residuals
+from uav_sim.messages import header, stamp_seconds
+from uav_sim.node_tools import (
+    ERROR,
+    OK,
+    STREAM_QOS,
+    WARN,
+    Diagnostics,
+    declare_parameters,
+    run_node,
+)
+
+from uav_fault_estimator.estimator_config import config_from_parameters
+from uav_fault_estimator.mhe import EstimateResult, MovingHorizonEstimator
+from uav_fault_estimator.proxqp_solver import SolveStatus
+
+PARAMETERS = {
+    "fault_names": "the estimated faults: columns of the residuals' S, by name",
+    "fault_models": "per fault: monotonic, monotonic_decreasing, random_walk, uniform, "
+    "laplacian or constant",
+    "fault_model_scales_pct": "per fault: the model's scale (lambda, sigma or a) [%/sample]",
+    "fault_model_coefficients": "per fault: a in f(t+1) = a f(t) + gamma (random_walk)",
+    "lower_bounds_pct": "per fault: lower bound on f [%]",
+    "upper_bounds_pct": "per fault: upper bound on f [%]",
+    "prior_pct": "per fault: f before any data [%]",
+    "horizon": "N: residual samples in the moving window",
+    "residual_variances": "Q: noise variance of each of the 6 residual channels",
+    "handover_variances_pct2": "R of eq. 17: variance of the handed-over first point [%^2]",
+    "solver_eps_abs": "ProxSuite's absolute tolerance (on the scaled problem)",
+    "solver_max_iter": "ProxSuite's iteration limit per update",
+}
+RECENT_SOLVES = 200  # solve times kept for the median and p99 on /diagnostics
+
+
+class MheNode(Node):
+    """Thin adapter: Residuals in, one estimator update each, FaultEstimate out."""
+
+    def __init__(self) -> None:
+        super().__init__("mhe_node")
+        self.parameters = declare_parameters(
+            self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS
+        )
+        self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
+        self.names = [fault.name for fault in self.config.faults]
+        self.estimator = MovingHorizonEstimator(self.config)
+        self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", STREAM_QOS)
+        self.create_subscription(Residuals, "residuals", self.on_residuals, STREAM_QOS)
+        self.diagnostics = Diagnostics(self)
+        self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
+        self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
+        self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
+                       "stamp_resets": 0}
+
+    def on_residuals(self, message: Residuals) -> None:
+        time_s = stamp_seconds(message.header.stamp)
+        if self.window_stamps_s and time_s <= self.window_stamps_s[-1]:
+            self.get_logger().warning(
+                f"residual stamp {time_s:.3f} s is not newer than {self.window_stamps_s[-1]:.3f}"
+                " s: the source restarted, estimator reset")
+            self.estimator = MovingHorizonEstimator(self.config)
+            self.window_stamps_s.clear()
+            self.counts["stamp_resets"] += 1
+        columns = self.columns(message)
+        if columns is None:
+            return
+        sensitivity = np.array(message.sensitivity_per_pct).reshape(Residuals.CHANNELS, -1)
+        result = self.estimator.update(
+            np.array(message.residual), sensitivity[:, columns], np.array(message.valid)
+        )
+        self.window_stamps_s.append(time_s)
+        self.publisher.publish(self.estimate_message(time_s, result))
+        self.count(result)
+
+    def columns(self, message: Residuals) -> list[int] | None:
+        """Indices of the estimated faults among the message's S columns; None if absent."""
+        offered = list(message.fault_names)
+        missing = [name for name in self.names if name not in offered]
+        if missing or len(message.sensitivity_per_pct) != Residuals.CHANNELS * len(offered):
+            self.counts["rejected_messages"] += 1
+            reason = (f"residuals lack the faults {missing}" if missing else
+                      f"S has {len(message.sensitivity_per_pct)} entries for "
+                      f"{len(offered)} faults")
+            self.get_logger().warning(f"residuals skipped: {reason}", throttle_duration_sec=5.0)
+            self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.counts)
+            return None
+        return [offered.index(name) for name in self.names]
+
+    def estimate_message(self, time_s: float, result: EstimateResult) -> FaultEstimate:
+        stamps = self.window_stamps_s
+        return FaultEstimate(
+            header=header(time_s),
+            names=self.names,
+            values_pct=result.fault_pct.tolist(),
+            solver_status=int(result.status),
+            updated=result.status is SolveStatus.SOLVED,
+            horizon=self.config.horizon,
+            horizon_s=stamps[-1] - stamps[0],
+            window_values_pct=result.window_pct.ravel().tolist(),  # row-major N x p
+            iterations=result.iterations,
+            solve_time_ms=result.update_time_ms,
+        )
+
+    def count(self, result: EstimateResult) -> None:
+        """Counters and solve times for /diagnostics."""
+        self.counts["updates"] += 1
+        if result.status is SolveStatus.WAITING:
+            level, text = OK, "waiting for valid residuals"
+        elif result.status is SolveStatus.SOLVED:
+            self.counts["solves"] += 1
+            self.update_times_ms.append(result.update_time_ms)
+            level, text = OK, "estimating"
+        else:
+            self.counts["not_solved"] += 1
+            level, text = WARN, f"{result.status.name.lower()}: last good estimate kept"
+        times = np.array(self.update_times_ms) if self.update_times_ms else np.zeros(1)
+        self.diagnostics.update(level, text, {
+            **self.counts,
+            "median_ms": f"{np.median(times):.3f}",
+            "p99_ms": f"{np.percentile(times, 99):.3f}",
+            "max_ms": f"{times.max():.3f}",
+        })
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node("mhe_node", MheNode, args=args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
