@@ -5,9 +5,11 @@
 
 1. A realistic sequence: the default scenario flown by the core simulator (turbulence as
    given), its residuals and sensitivities from the residual core every 0.5 s, and
-   mhe_node's default configuration (config/mhe_node.yaml: N = 50, p = 4 monotonic faults
-   bounded to [0, 100] %). The project's estimator runs it (the whole `update` call, as
-   the node makes it); the same QPs then go to OSQP (same pattern, warm start, polish),
+   mhe_node's default configuration (config/mhe_node.yaml: N = 50, four monotonic faults
+   bounded to [0, 100] %), first with the four faults alone (p = 4), then with the three
+   wind-error columns as well (the node's default). The project's estimator runs it (the
+   whole `update` call, as the node makes it); the same QPs then go to OSQP (same
+   pattern, warm start, polish),
    quadprog (dense active set, from scratch) and Clarabel (interior point). Per solver:
    median and p99 time and the largest deviation of the faults from the reference
    (Clarabel at 1e-12, polished on its active set; untimed).
@@ -48,15 +50,16 @@ UPDATE_PERIOD_S = 0.5
 EPS = 1e-6  # absolute tolerance asked of every iterative solver
 
 
-def node_config() -> EstimatorConfig:
+def node_config(wind_errors: bool = False) -> EstimatorConfig:
+    """mhe_node's defaults; with the three wind-error nuisance columns or faults only."""
     parameters = yaml.safe_load(NODE_CONFIG.read_text())["/**"]["ros__parameters"]
-    return config_from_parameters(parameters, channels=6)
+    return config_from_parameters({**parameters, "estimate_wind_errors": wind_errors}, 6)
 
 
 def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
-    """y (samples, 6), S (samples, 6, 4), valid (samples, 6) every 0.5 s of the default
-    scenario from the first valid residual on, from the core simulator and residual
-    generator."""
+    """y (samples, 6), S (samples, 6, 4 + 3), valid (samples, 6) every 0.5 s of the
+    default scenario from the first valid residual on, from the core simulator and residual
+    generator (residual_node's defaults: the four faults, then the three wind errors)."""
     scenario = load_scenario(default_scenario_path())
     scenario = dataclasses.replace(
         scenario, wind=dataclasses.replace(scenario.wind, turbulence=turbulence),
@@ -64,7 +67,7 @@ def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
     )
     simulation = Simulation(scenario)
     generator = ResidualGenerator(aircraft_predictor_factory(), PAPER_FAULT_NAMES, 5.0, 4.0,
-                                  UPDATE_PERIOD_S, 12.0)
+                                  UPDATE_PERIOD_S, 12.0, wind_error_step_mps=1.0)
     every = round(UPDATE_PERIOD_S / simulation.period_s)
     rows = []
     sample = simulation.sample()
@@ -187,9 +190,14 @@ def print_row(name: str, times_ms: np.ndarray, deviation: float) -> None:
           f" {deviation:9.1e} |")
 
 
-def compare_solvers(updates: int, turbulence: str) -> None:
-    config = node_config()
-    sequence = flown_sequence(config.horizon + updates, turbulence)
+def faults_only(sequence: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """The sequence with S cut to the four fault columns."""
+    y, s, valid = sequence
+    return y, s[:, :, : len(PAPER_FAULT_NAMES)], valid
+
+
+def compare_solvers(config: EstimatorConfig, sequence: tuple[np.ndarray, ...],
+                    title: str) -> None:
     times, qps, problem = run_estimator(config, sequence, keep_qps=True)
     exact = references(problem, qps)
     scale = max(1.0, max(float(np.abs(x).max()) for x in exact))
@@ -198,9 +206,8 @@ def compare_solvers(updates: int, turbulence: str) -> None:
         return max(float(np.abs(x - r).max()) for x, r in zip(solutions, exact,
                                                                strict=True)) / scale
 
-    print(f"Default scenario ({turbulence} turbulence), mhe_node defaults: N = "
-          f"{config.horizon}, p = {len(config.faults)}, {len(qps)} updates; deviation: max "
-          "|f - f_ref| / max(1, max |f_ref|)")
+    print(f"\n{title}: N = {config.horizon}, {len(config.faults)} columns, {len(qps)} "
+          "updates; deviation: max |x - x_ref| / max(1, max |x_ref|)")
     print("| solver                             | median ms |   p99 ms | deviation |")
     print("|---|---|---|---|")
     print_row("proxsuite: project estimator update", times, deviation([x for *_, x in qps]))
@@ -211,10 +218,9 @@ def compare_solvers(updates: int, turbulence: str) -> None:
         print_row(name, solver_times, deviation(solutions))
 
 
-def scaling(updates: int, turbulence: str) -> None:
+def scaling(flown: tuple[np.ndarray, ...], updates: int) -> None:
     horizons = (25, 50, 100, 200, 400)
-    flown = flown_sequence(max(horizons) + updates, turbulence)
-    print("\nProject estimator, update time [ms]: N on the flown sequence (p = 4), p on "
+    print("\nProject estimator, update time [ms]: N on the flown sequence (4 faults), p on "
           "synthetic ones (seed 1, N = 50)")
     print("| N | p | median | p99 |")
     print("|---|---|---|---|")
@@ -235,8 +241,13 @@ def main() -> None:
     parser.add_argument("--turbulence", default="light",
                         choices=("none", "light", "moderate", "severe"))
     arguments = parser.parse_args()
-    compare_solvers(arguments.updates, arguments.turbulence)
-    scaling(arguments.updates, arguments.turbulence)
+    flown = flown_sequence(400 + arguments.updates, arguments.turbulence)
+    first = tuple(a[: 50 + arguments.updates] for a in flown)
+    where = f"Default scenario, {arguments.turbulence} turbulence"
+    compare_solvers(node_config(), faults_only(first), f"{where}, the four faults (p = 4)")
+    compare_solvers(node_config(wind_errors=True), first,
+                    f"{where}, mhe_node defaults: four faults and three wind errors")
+    scaling(faults_only(flown), arguments.updates)
 
 
 if __name__ == "__main__":

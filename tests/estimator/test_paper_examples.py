@@ -49,7 +49,7 @@ ROCKET_CONFIG = EstimatorConfig(
         FaultConfig("thrust_loss", "monotonic", {"lambda_pct": 1.0}),
         FaultConfig("drag_increase", "monotonic", {"lambda_pct": 1.0}),
         FaultConfig("gimbal_sluggishness", "constant", {}),
-        FaultConfig("pitch_sensor_offset", "random_walk", {"sigma_pct": 1.0}),
+        FaultConfig("pitch_sensor_offset", "random_walk", {"sigma": 1.0}),
     ],
 )
 ESTIMATE_TIMES_S = (70, 115, 150)

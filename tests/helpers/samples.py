@@ -50,7 +50,7 @@ SAMPLE_FIELDS: dict[str, dict[str, Any]] = {
         "predicted": [0.5, 0.25, -10.5, -0.01, 0.02, -0.03],
         "valid": [True, True, True, True, False, True],
         "fault_names": ["right_wing_lift_loss", "right_wing_drag_increase"],
-        "sensitivity_per_pct": [0.0, -0.01, 0.0, 0.0, 0.09, 0.0, 0.2, 0.0, 0.0, 0.0, 0.0, 0.05],
+        "sensitivity": [0.0, -0.01, 0.0, 0.0, 0.09, 0.0, 0.2, 0.0, 0.0, 0.0, 0.0, 0.05],
     },
     "FaultEstimate": {
         "names": ["right_wing_lift_loss"],

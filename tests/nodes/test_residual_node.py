@@ -8,6 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 from helpers.processes import ros2_run_argv
+from uav_fault_estimator.residuals import WIND_ERROR_NAMES
 from uav_fault_msgs.msg import Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.messages import stamp_seconds
@@ -56,10 +57,11 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     assert stamps == pytest.approx(
         [PERIOD_S * k for k in range(1, first + 1)]
         + [PERIOD_S * k for k in range(1, expected - first + 1)], abs=1e-9)
+    columns = [*PAPER_FAULT_NAMES, *WIND_ERROR_NAMES]  # the defaults
     for message in received:
-        assert list(message.fault_names) == list(PAPER_FAULT_NAMES)
-        sensitivity = np.array(message.sensitivity_per_pct).reshape(6, -1)
-        assert sensitivity.shape == (6, len(PAPER_FAULT_NAMES))
+        assert list(message.fault_names) == columns
+        sensitivity = np.array(message.sensitivity).reshape(6, -1)
+        assert sensitivity.shape == (6, len(columns))
         assert np.all(np.isfinite(sensitivity)) and np.all(np.isfinite(message.residual))
     valid = {stamp: list(message.valid)
              for stamp, message in zip(stamps[:first], received[:first], strict=True)}

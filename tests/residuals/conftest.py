@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 
-import numpy as np
 import pytest
 from helpers.flights import calm, fly
 from uav_fault_estimator.prediction import aircraft_predictor_factory
@@ -19,23 +18,26 @@ TAU_A_S = 4.0
 SETTLED_S = 3 * TAU_A_S  # the filter transient, excluded from every figure
 SECANT_STEP_PCT = 5.0
 
-ResidualFlight = Callable[[dict[str, float]], list[ResidualSample]]
+ResidualFlight = Callable[..., list[ResidualSample]]
 
 
 @pytest.fixture(scope="session")
 def residual_flight() -> ResidualFlight:
-    """Residuals after the transient of a calm flight with faults [%] held from the start."""
+    """Residuals after the transient of a calm flight with faults [%] held from the start;
+    with wind-error columns in S when wind_error_step_mps > 0."""
     base = calm(load_scenario(default_scenario_path()), FLIGHT_S)
     factory = aircraft_predictor_factory()
     flown: dict[tuple, list[ResidualSample]] = {}
 
-    def residuals(faults_pct: dict[str, float]) -> list[ResidualSample]:
-        key = tuple(sorted(faults_pct.items()))
+    def residuals(faults_pct: dict[str, float],
+                  wind_error_step_mps: float = 0.0) -> list[ResidualSample]:
+        key = (tuple(sorted(faults_pct.items())), wind_error_step_mps)
         if key not in flown:
-            faults = tuple(SeededFault(name, 0.0, 0.0, value) for name, value in key)
+            faults = tuple(SeededFault(name, 0.0, 0.0, value) for name, value in key[0])
             generator = ResidualGenerator(
                 factory, PAPER_FAULT_NAMES, SECANT_STEP_PCT, TAU_A_S,
                 sensitivity_period_s=0.5, recovery_s=SETTLED_S,
+                wind_error_step_mps=wind_error_step_mps,
             )
             samples = [
                 generator.update(s.time_s, s.state, s.controls, s.wind_filtered_ned_mps)
@@ -45,8 +47,3 @@ def residual_flight() -> ResidualFlight:
         return flown[key]
 
     return residuals
-
-
-def stacked(samples: list[ResidualSample], field: str) -> np.ndarray:
-    """One field of every sample, stacked along a new first axis."""
-    return np.array([getattr(sample, field) for sample in samples])

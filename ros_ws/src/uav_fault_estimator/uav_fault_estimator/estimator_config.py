@@ -11,6 +11,7 @@ import numpy as np
 from uav_sim.channels import PAPER_FAULT_NAMES
 
 from uav_fault_estimator.fault_models import SCALE_PARAMETER, FaultModel, make_model
+from uav_fault_estimator.residuals import WIND_ERROR_NAMES
 
 
 @dataclass
@@ -96,7 +97,8 @@ class EstimatorConfig:
 
 def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> EstimatorConfig:
     """The configuration from mhe_node's flat parameters (config/mhe_node.yaml), for
-    `channels` residual channels; ValueError naming the first wrong entry."""
+    `channels` residual channels; ValueError naming the first wrong entry. The estimated
+    columns are the faults, then the wind-estimate errors when estimate_wind_errors."""
     names = list(parameters["fault_names"])
     per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
                  "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2")
@@ -118,10 +120,15 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
             name, model, model_parameters, lower_pct=parameters["lower_bounds_pct"][k],
             upper_pct=parameters["upper_bounds_pct"][k], prior_pct=parameters["prior_pct"][k],
         ))
+    handover = list(parameters["handover_variances_pct2"])
+    if parameters["estimate_wind_errors"]:  # nuisance parameters: random walks [m/s]
+        faults += [FaultConfig(name, "random_walk", {"sigma": parameters["wind_error_sigma_mps"]})
+                   for name in WIND_ERROR_NAMES]
+        handover += [parameters["wind_error_handover_variance_m2ps2"]] * len(WIND_ERROR_NAMES)
     config = EstimatorConfig(
         horizon=parameters["horizon"],
         q_diag=tuple(parameters["residual_variances"]),
-        r_diag_pct2=tuple(parameters["handover_variances_pct2"]),
+        r_diag_pct2=tuple(handover),
         faults=faults,
         solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
                               max_iter=parameters["solver_max_iter"]),

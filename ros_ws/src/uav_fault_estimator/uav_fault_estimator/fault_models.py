@@ -81,13 +81,13 @@ class RandomWalk:
     gives 1/(2sigma²), used here.)
     """
 
-    sigma_pct: float = 1.0
+    sigma: float = 1.0  # per sample, in the column's unit: % for a fault, m/s for a wind error
     coefficient: float = 1.0
 
     def increment_terms(self) -> IncrementTerms:
-        _require_positive("sigma_pct", self.sigma_pct)
+        _require_positive("sigma", self.sigma)
         return IncrementTerms(
-            coefficient=self.coefficient, quadratic_weight=1.0 / self.sigma_pct**2
+            coefficient=self.coefficient, quadratic_weight=1.0 / self.sigma**2
         )
 
 
@@ -133,7 +133,7 @@ MODEL_CLASSES: dict[str, type] = {
 SCALE_PARAMETER: dict[str, str | None] = {
     "monotonic": "lambda_pct",
     "monotonic_decreasing": "lambda_pct",
-    "random_walk": "sigma_pct",
+    "random_walk": "sigma",
     "uniform": "half_width_pct",
     "laplacian": "scale_pct",
     "constant": None,

@@ -39,6 +39,10 @@ PARAMETERS = {
     "horizon": "N: residual samples in the moving window",
     "residual_variances": "Q: noise variance of each of the 6 residual channels",
     "handover_variances_pct2": "R of eq. 17: variance of the handed-over first point [%^2]",
+    "estimate_wind_errors": "also estimate the wind-estimate errors (S columns *_error of "
+    "residual_node) as random-walk nuisance parameters",
+    "wind_error_sigma_mps": "random-walk step of each wind error per residual sample [m/s]",
+    "wind_error_handover_variance_m2ps2": "R of eq. 17 for each wind error [m^2/s^2]",
     "solver_eps_abs": "ProxSuite's absolute tolerance (on the scaled problem)",
     "solver_max_iter": "ProxSuite's iteration limit per update",
 }
@@ -54,7 +58,8 @@ class MheNode(Node):
             self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS
         )
         self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
-        self.names = [fault.name for fault in self.config.faults]
+        self.names = list(self.parameters["fault_names"])  # published
+        self.estimated = [fault.name for fault in self.config.faults]  # faults, then nuisance
         self.estimator = MovingHorizonEstimator(self.config)
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", STREAM_QOS)
         self.create_subscription(Residuals, "residuals", self.on_residuals, STREAM_QOS)
@@ -76,7 +81,7 @@ class MheNode(Node):
         columns = self.columns(message)
         if columns is None:
             return
-        sensitivity = np.array(message.sensitivity_per_pct).reshape(Residuals.CHANNELS, -1)
+        sensitivity = np.array(message.sensitivity).reshape(Residuals.CHANNELS, -1)
         result = self.estimator.update(
             np.array(message.residual), sensitivity[:, columns], np.array(message.valid)
         )
@@ -87,28 +92,29 @@ class MheNode(Node):
     def columns(self, message: Residuals) -> list[int] | None:
         """Indices of the estimated faults among the message's S columns; None if absent."""
         offered = list(message.fault_names)
-        missing = [name for name in self.names if name not in offered]
-        if missing or len(message.sensitivity_per_pct) != Residuals.CHANNELS * len(offered):
+        missing = [name for name in self.estimated if name not in offered]
+        if missing or len(message.sensitivity) != Residuals.CHANNELS * len(offered):
             self.counts["rejected_messages"] += 1
-            reason = (f"residuals lack the faults {missing}" if missing else
-                      f"S has {len(message.sensitivity_per_pct)} entries for "
+            reason = (f"residuals lack the columns {missing}" if missing else
+                      f"S has {len(message.sensitivity)} entries for "
                       f"{len(offered)} faults")
             self.get_logger().warning(f"residuals skipped: {reason}", throttle_duration_sec=5.0)
             self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.counts)
             return None
-        return [offered.index(name) for name in self.names]
+        return [offered.index(name) for name in self.estimated]
 
     def estimate_message(self, time_s: float, result: EstimateResult) -> FaultEstimate:
         stamps = self.window_stamps_s
+        faults = len(self.names)
         return FaultEstimate(
             header=header(time_s),
             names=self.names,
-            values_pct=result.fault_pct.tolist(),
+            values_pct=result.fault_pct[:faults].tolist(),
             solver_status=int(result.status),
             updated=result.status is SolveStatus.SOLVED,
             horizon=self.config.horizon,
             horizon_s=stamps[-1] - stamps[0],
-            window_values_pct=result.window_pct.ravel().tolist(),  # row-major N x p
+            window_values_pct=result.window_pct[:, :faults].ravel().tolist(),  # row-major N x p
             iterations=result.iterations,
             solve_time_ms=result.update_time_ms,
         )
@@ -126,8 +132,11 @@ class MheNode(Node):
             self.counts["not_solved"] += 1
             level, text = WARN, f"{result.status.name.lower()}: last good estimate kept"
         times = np.array(self.update_times_ms) if self.update_times_ms else np.zeros(1)
+        nuisance = dict(zip(self.estimated[len(self.names):],
+                            result.fault_pct[len(self.names):], strict=True))
         self.diagnostics.update(level, text, {
             **self.counts,
+            **{f"{name}_mps": f"{value:.2f}" for name, value in nuisance.items()},
             "median_ms": f"{np.median(times):.3f}",
             "p99_ms": f"{np.percentile(times, 99):.3f}",
             "max_ms": f"{times.max():.3f}",

@@ -33,6 +33,7 @@ PARAMETERS = {
     "update_period_s": "residuals are published every this much simulation time [s]",
     "sensitivity_period_s": "S is recomputed every this much simulation time [s]",
     "recovery_s": "rows stay invalid this long after a missing channel is back [s]",
+    "wind_error_step_mps": "secant step of the wind-error columns of S; 0: none [m/s]",
 }
 # Subscribed in this order: sim_node's wait_for_subscribers counts the subscriptions of
 # `state`, so state comes last, when the others exist already.
@@ -55,7 +56,7 @@ class ResidualNode(Node):
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
         self.generator = ResidualGenerator(
             aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
-            p["sensitivity_period_s"], p["recovery_s"],
+            p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
         )
         self.matcher = StampMatcher(tuple(STREAMS))
         self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
@@ -116,8 +117,8 @@ class ResidualNode(Node):
             observed=sample.observed.tolist(),
             predicted=sample.predicted.tolist(),
             valid=sample.valid.tolist(),
-            fault_names=list(self.generator.fault_names),
-            sensitivity_per_pct=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
+            fault_names=list(self.generator.column_names),
+            sensitivity=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
         )
 
     def health(self) -> dict[str, object]:

@@ -14,6 +14,11 @@ S is filtered exactly like a_hat: if the aircraft accelerates as phi(x | f) ~= p
 S_raw f, then y = F_a (a_raw - phi(x | 0)) ~= F_a (S_raw f) = (F_a S_raw) f for a slowly
 changing f, so the S for which y ~= S f holds is the filtered one.
 
+Optionally S gets three more columns, the wind-estimate errors (WIND_ERROR_NAMES): the
+model with the filtered wind shifted by a step along north, east or down, differenced the
+same way. Gusts the 10 s filtered wind misses are the largest part of the residual in
+turbulence; with these columns an estimator can take them out as nuisance parameters.
+
 Frames: the model gives dv/dt of v = (NED ground velocity, body rates), so the linear rows
 are filtered in NED. The output expresses them in body axes (x forward, y right, z down),
 rotating y, a, a_hat and S's rows by the newest attitude: the same rotation on both sides
@@ -62,6 +67,22 @@ ROW_NEEDS: tuple[frozenset[str], ...] = (
 )
 
 
+# Columns of S beyond the faults: the error of the filtered wind estimate, w - w_hat [m/s].
+# Turbulence reaches the residuals through it: y ~= S_f f + S_w (w - w_hat), so an
+# estimator may carry it as a nuisance parameter.
+WIND_ERROR_NAMES = ("wind_north_error", "wind_east_error", "wind_down_error")
+
+
+@dataclass(frozen=True)
+class _Column:
+    """One column of S: a model copy, the wind shift it sees, and the secant step."""
+
+    name: str
+    model: Prediction
+    wind_shift_mps: np.ndarray
+    step: float  # [%] for a fault, [m/s] for a wind error
+
+
 @dataclass(frozen=True)
 class ResidualSample:
     """Residuals at one sensor time; linear rows in body axes, per the module docstring."""
@@ -70,7 +91,7 @@ class ResidualSample:
     residual: np.ndarray      # (6,) y = a - a_hat [m/s^2 x3, rad/s^2 x3]
     observed: np.ndarray      # (6,) a
     predicted: np.ndarray     # (6,) a_hat
-    sensitivity: np.ndarray   # (6, p) S [unit of the row per % of fault]
+    sensitivity: np.ndarray   # (6, columns) S [row unit per % of fault, or per m/s of wind]
     valid: np.ndarray         # (6,) bool: the row's needed channels were all present
 
 
@@ -93,15 +114,28 @@ class ResidualGenerator:
         tau_a_s: float,
         sensitivity_period_s: float,
         recovery_s: float,
+        wind_error_step_mps: float = 0.0,
     ) -> None:
         if not secant_step_pct > 0:
             raise ValueError(f"secant step must be positive, got {secant_step_pct} %")
-        self.fault_names = tuple(fault_names)
-        self.secant_step_pct = secant_step_pct
+        if not wind_error_step_mps >= 0:
+            raise ValueError(f"wind error step must be 0 (off) or positive, got "
+                             f"{wind_error_step_mps} m/s")
         self.sensitivity_period_s = sensitivity_period_s
         self.recovery_s = recovery_s
         self.nominal = predictor_factory({})
-        self.faulty = [predictor_factory({name: secant_step_pct}) for name in self.fault_names]
+        self.columns = [
+            _Column(name, predictor_factory({name: secant_step_pct}), np.zeros(3),
+                    secant_step_pct)
+            for name in fault_names
+        ]
+        if wind_error_step_mps > 0:
+            self.columns += [
+                _Column(name, predictor_factory({}), wind_error_step_mps * np.eye(3)[axis],
+                        wind_error_step_mps)
+                for axis, name in enumerate(WIND_ERROR_NAMES)
+            ]
+        self.column_names = tuple(column.name for column in self.columns)
         self.observed_filter = LowPass(tau_a_s)
         self.predicted_filter = LowPass(tau_a_s)
         self.reset()
@@ -122,13 +156,13 @@ class ResidualGenerator:
 
     def _prediction(self, state: np.ndarray, controls: np.ndarray, wind: np.ndarray,
                     time_s: float) -> np.ndarray:
-        """P = [phi(x|0), S_raw] (6, 1 + p); S_raw recomputed when its period is due."""
+        """P = [phi(x|0), S_raw] (6, 1 + columns); S_raw recomputed when its period is due."""
         nominal = np.asarray(self.nominal(state, controls, wind), dtype=float)
         if time_s >= self.next_sensitivity_s or self.raw_sensitivity is None:
-            faulty = [np.asarray(model(state, controls, wind)) for model in self.faulty]
-            self.raw_sensitivity = (
-                np.column_stack(faulty) - nominal[:, None] if faulty else np.zeros((6, 0))
-            ) / self.secant_step_pct
+            self.raw_sensitivity = np.zeros((6, len(self.columns)))
+            for j, column in enumerate(self.columns):
+                shifted = column.model(state, controls, wind + column.wind_shift_mps)
+                self.raw_sensitivity[:, j] = (np.asarray(shifted) - nominal) / column.step
             self.next_sensitivity_s = time_s + self.sensitivity_period_s
         prediction = np.column_stack([nominal, self.raw_sensitivity])
         if not np.all(np.isfinite(prediction)):
