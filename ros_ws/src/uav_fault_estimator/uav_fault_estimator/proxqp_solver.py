@@ -11,7 +11,11 @@ Choices, each measured with scripts/bench_mhe.py (N = 50, p = 4, ProxSuite 0.8.0
   mu_in (1e-4) on updates: the guess is close, so constraints are enforced stiffly at
   once. On the flown sequence: 1e-5 is 10 % faster in the median but doubles the worst
   case on a fault step; 1e-3 is 2x slower; 1e-2 and the default 1e-1 hit the iteration
-  limit.
+  limit. ProxSuite still lowers mu_in when it must, and each such update costs a
+  refactorisation whose price grows faster than N: that is why the update time is linear
+  only up to N of about 100 (README). Holding mu_in at 1e-6 instead (mu_min_in) made the
+  median linear up to N = 400 (0.33 ms at N = 50, 2.0 ms at 400) but left about 1 update
+  in 100 stalled, and their retry with ProxSuite's schedule took up to 140 ms: rejected.
 - Ruiz preconditioning computed once at init; two iterative refinement steps.
 """
 
