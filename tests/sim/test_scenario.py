@@ -89,3 +89,14 @@ def test_unreadable_and_malformed_files(tmp_path):
         load_scenario(write(tmp_path, "name: [unclosed"))
     with pytest.raises(ScenarioError, match="'the file' must be a mapping"):
         load_scenario(write(tmp_path, "- just\n- a list\n"))
+
+
+SHIPPED = sorted(default_scenario_path().parent.glob("*.yaml"))
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("path", SHIPPED, ids=[path.stem for path in SHIPPED])
+def test_every_shipped_scenario_loads_under_its_file_name(path):
+    scenario = load_scenario(path)
+    assert scenario.name == path.stem
+    assert scenario.duration_s == 300
