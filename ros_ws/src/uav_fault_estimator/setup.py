@@ -27,6 +27,7 @@ setup(
         "console_scripts": [
             f"residual_node = {PACKAGE}.residual_node:main",
             f"mhe_node = {PACKAGE}.mhe_node:main",
+            f"recorder_node = {PACKAGE}.recorder_node:main",
         ],
     },
 )

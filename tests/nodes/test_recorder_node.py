@@ -1,0 +1,58 @@
+"""recorder_node beside sim_node: every message of every stream in a readable rosbag2
+directory (MCAP), closed properly on SIGINT."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+from pathlib import Path
+
+import pytest
+from ament_index_python.packages import get_package_share_directory
+from helpers.processes import ros2_run_argv, wait_until
+from rosbags.rosbag2 import Reader
+from uav_fault_estimator.recording import project_typestore
+
+pytestmark = pytest.mark.integration
+
+DURATION_S = 5.0
+STREAMS = ("/state", "/controls", "/wind/filtered", "/faults/seeded", "/clock")
+
+
+@pytest.mark.timeout(120)
+def test_every_stream_message_is_recorded_and_readable(short_scenario, start_process,
+                                                        tmp_path):
+    bag = tmp_path / "flight"
+    recorder = start_process(ros2_run_argv("uav_fault_estimator", "recorder_node", ros_args=[
+        "-p", f"output_dir:={bag}"]), "recorder_node")
+    assert wait_until(lambda: bag.exists() or not recorder.running(), timeout_s=30)
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
+        "-p", f"scenario:={short_scenario(DURATION_S)}", "-p", "real_time_factor:=0.0",
+        "-p", "wait_for_subscribers:=1"]), "sim_node")
+    assert sim.wait(timeout_s=60) == 0, sim.output()
+    assert recorder.stop(signal.SIGINT) == 0, recorder.output()
+
+    typestore = project_typestore(
+        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    counts: dict[str, int] = {}
+    with Reader(bag) as reader:
+        for connection, _, raw in reader.messages():
+            typestore.deserialize_cdr(raw, connection.msgtype)  # every message decodes
+            counts[connection.topic] = counts.get(connection.topic, 0) + 1
+    print(f"recorded: {counts}")
+    expected = round(DURATION_S * 20) + 1
+    for topic in STREAMS:
+        assert counts.get(topic) == expected, topic
+    assert "recording closed in" in recorder.output()
+
+
+@pytest.mark.timeout(60)
+def test_an_existing_output_dir_is_refused_with_one_message(tmp_path):
+    result = subprocess.run(
+        ros2_run_argv("uav_fault_estimator", "recorder_node",
+                      ros_args=["-p", f"output_dir:={tmp_path}"]),
+        capture_output=True, text=True, timeout=50,
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert f"recorder_node: output_dir '{tmp_path}' must be given and must not exist" in (
+        result.stderr)
