@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""metrics.json (DESIGN.md) of a recorded run, and the metrics as a table.
+"""metrics.json (DESIGN.md) and the figures of a recorded run; the metrics as a table.
 
     python scripts/report.py BAG [--out DIR] [--scenario NAME]
 
 BAG: a rosbag2 directory recorded by recorder_node. DIR (default: BAG's parent) receives
-metrics.json. NAME defaults to DIR's folder name (demo runs live in runs/<scenario>/).
-The figures are still to come (the main-job issue).
+metrics.json and the figures (PNG: states, track, wind, residuals, sensitivity,
+estimates). NAME defaults to DIR's folder name (demo runs live in runs/<scenario>/).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
+from uav_fault_estimator.figures import plot_run
 from uav_fault_estimator.recording import project_typestore
 from uav_fault_estimator.report import read_run, run_metrics
 
@@ -61,7 +62,9 @@ def main() -> int:
     metrics = run_metrics(run, arguments.scenario or out.resolve().name)
     out.mkdir(parents=True, exist_ok=True)
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
+    figures = plot_run(arguments.bag, typestore, out)
     print(table(metrics))
+    print(f"written to {out}: metrics.json, " + ", ".join(path.name for path in figures))
     return 0
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from ament_index_python.packages import get_package_share_directory
 from helpers.processes import ros2_run_argv, wait_until
+from uav_fault_estimator.figures import plot_run
 from uav_fault_estimator.recording import project_typestore
 from uav_fault_estimator.report import read_run, run_metrics
 from uav_fault_msgs.msg import FaultEstimate
@@ -47,7 +48,13 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     assert recorder.stop(signal.SIGINT) == 0, recorder.output()
 
     metrics = run_metrics(read_run(bag, typestore), scenario="short")
+    figures = plot_run(bag, typestore, tmp_path / "figures")
     print(metrics)
+    print("figures:", [(path.name, path.stat().st_size) for path in figures])
+    assert [path.name for path in figures] == [
+        "states.png", "track.png", "wind.png", "residuals.png", "sensitivity.png",
+        "estimates.png"]
+    assert all(path.stat().st_size > 10_000 for path in figures)
     assert metrics["pipeline"]["messages_received"] == expected
     assert metrics["duration_s"] == pytest.approx(DURATION_S)
     assert list(metrics["faults"]) == list(PAPER_FAULT_NAMES)

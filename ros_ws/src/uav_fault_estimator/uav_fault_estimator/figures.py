@@ -1,0 +1,121 @@
+"""The run's figures (PNG) from a recording: states, north-east track, filtered wind,
+residuals, one sensitivity column, and each fault's estimate over its seeded value.
+matplotlib without a display (Agg); no ROS here."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from rosbags.rosbag2 import Reader
+from rosbags.typesys.store import Typestore
+
+EARTH_RADIUS_M = 6378137.0
+RESIDUAL_LABELS = ("x [m/s²]", "y [m/s²]", "z [m/s²]", "roll [rad/s²]", "pitch [rad/s²]",
+                   "yaw [rad/s²]")
+
+
+def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dict[str, list]:
+    """The decoded messages of each topic, in recording order."""
+    messages: dict[str, list] = {topic: [] for topic in topics}
+    with Reader(bag) as reader:
+        wanted = [c for c in reader.connections if c.topic in messages]
+        for connection, _, raw in reader.messages(connections=wanted):
+            messages[connection.topic].append(typestore.deserialize_cdr(raw, connection.msgtype))
+    return messages
+
+
+def _stamps(messages: list) -> np.ndarray:
+    return np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in messages])
+
+
+def _save(figure: plt.Figure, path: Path) -> Path:
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+    return path
+
+
+def plot_run(bag: Path, typestore: Typestore, out: Path) -> list[Path]:
+    """Write every figure of the run into out; the paths written."""
+    topics = ("/state", "/wind/filtered", "/residuals", "/faults/estimate", "/faults/seeded")
+    data = read_topics(bag, typestore, topics)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    state, t_state = data["/state"], _stamps(data["/state"])
+    if state:
+        figure, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+        axes[0].plot(t_state, [m.altitude_m for m in state])
+        axes[0].set_ylabel("altitude [m]")
+        speed = [math.hypot(m.velocity_north_mps, m.velocity_east_mps) for m in state]
+        axes[1].plot(t_state, speed)
+        axes[1].set_ylabel("ground speed [m/s]")
+        for name in ("roll", "pitch"):
+            axes[2].plot(t_state, np.degrees([getattr(m, f"{name}_rad") for m in state]),
+                         label=name)
+        axes[2].set_ylabel("attitude [deg]")
+        axes[2].legend()
+        axes[2].set_xlabel("simulation time [s]")
+        written.append(_save(figure, out / "states.png"))
+        latitude0, longitude0 = state[0].latitude_rad, state[0].longitude_rad
+        north = [(m.latitude_rad - latitude0) * EARTH_RADIUS_M for m in state]
+        east = [(m.longitude_rad - longitude0) * EARTH_RADIUS_M * math.cos(latitude0)
+                for m in state]
+        figure, axis = plt.subplots(figsize=(6, 6))
+        axis.plot(east, north)
+        axis.set_xlabel("east [m]")
+        axis.set_ylabel("north [m]")
+        axis.set_aspect("equal")
+        axis.set_title("ground track from the start")
+        written.append(_save(figure, out / "track.png"))
+    wind = data["/wind/filtered"]
+    if wind:
+        figure, axis = plt.subplots(figsize=(9, 3.5))
+        for component in ("north", "east", "down"):
+            axis.plot(_stamps(wind), [getattr(m, f"{component}_mps") for m in wind],
+                      label=component)
+        axis.set_ylabel("filtered wind [m/s]")
+        axis.set_xlabel("simulation time [s]")
+        axis.legend()
+        written.append(_save(figure, out / "wind.png"))
+    residuals = data["/residuals"]
+    if residuals:
+        t_res = _stamps(residuals)
+        values = np.array([m.residual for m in residuals])
+        figure, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
+        for row, axis in enumerate(axes):
+            axis.plot(t_res, values[:, row])
+            axis.set_ylabel(RESIDUAL_LABELS[row], fontsize=8)
+        axes[-1].set_xlabel("simulation time [s]")
+        written.append(_save(figure, out / "residuals.png"))
+        names = list(residuals[0].fault_names)
+        column = np.array([np.reshape(m.sensitivity, (6, -1))[:, 0] for m in residuals])
+        figure, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
+        for row, axis in enumerate(axes):
+            axis.plot(t_res, column[:, row])
+            axis.set_ylabel(RESIDUAL_LABELS[row].replace("]", " per %]"), fontsize=8)
+        axes[0].set_title(f"sensitivity column: {names[0]}")
+        axes[-1].set_xlabel("simulation time [s]")
+        written.append(_save(figure, out / "sensitivity.png"))
+    estimates, seeded = data["/faults/estimate"], data["/faults/seeded"]
+    if estimates and seeded:
+        names = list(estimates[0].names)
+        seeded_names = list(seeded[0].names)
+        values = np.array([m.values_pct for m in estimates])
+        truth = np.array([m.values_pct for m in seeded])
+        figure, axes = plt.subplots(len(names), 1, figsize=(9, 2.4 * len(names)), sharex=True)
+        for j, (name, axis) in enumerate(zip(names, np.atleast_1d(axes), strict=True)):
+            if name in seeded_names:
+                axis.plot(_stamps(seeded), truth[:, seeded_names.index(name)], "k--",
+                          label="seeded")
+            axis.plot(_stamps(estimates), values[:, j], label="estimate")
+            axis.set_ylabel(f"{name} [%]", fontsize=8)
+            axis.legend(fontsize=8)
+        np.atleast_1d(axes)[-1].set_xlabel("simulation time [s]")
+        written.append(_save(figure, out / "estimates.png"))
+    return written
