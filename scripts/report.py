@@ -16,9 +16,8 @@ import sys
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
-from uav_fault_estimator.figures import plot_run
-from uav_fault_estimator.recording import project_typestore
-from uav_fault_estimator.report import read_run, run_metrics
+from uav_fault_estimator import figures, report
+from uav_fault_estimator.recording import project_typestore, read_topics
 
 
 def table(metrics: dict) -> str:
@@ -54,17 +53,18 @@ def main() -> int:
     out = arguments.out or arguments.bag.resolve().parent
     typestore = project_typestore(
         [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
-    try:
-        run = read_run(arguments.bag, typestore)
+    try:  # one pass over the recording for the metrics and the figures
+        messages = read_topics(arguments.bag, typestore, (*report.TOPICS, *figures.TOPICS))
+        run = report.run_from(messages, arguments.bag)
     except (ValueError, FileNotFoundError) as error:
         print(f"report.py: {error}", file=sys.stderr)
         return 1
-    metrics = run_metrics(run, arguments.scenario or out.resolve().name)
+    metrics = report.run_metrics(run, arguments.scenario or out.resolve().name)
     out.mkdir(parents=True, exist_ok=True)
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
-    figures = plot_run(arguments.bag, typestore, out)
+    written = figures.plot_run(messages, out)
     print(table(metrics))
-    print(f"written to {out}: metrics.json, " + ", ".join(path.name for path in figures))
+    print(f"written to {out}: metrics.json, " + ", ".join(path.name for path in written))
     return 0
 
 

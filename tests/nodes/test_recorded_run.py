@@ -9,9 +9,8 @@ from pathlib import Path
 import pytest
 from ament_index_python.packages import get_package_share_directory
 from helpers.processes import ros2_run_argv, wait_until
-from uav_fault_estimator.figures import plot_run
-from uav_fault_estimator.recording import project_typestore
-from uav_fault_estimator.report import read_run, run_metrics
+from uav_fault_estimator import figures, report
+from uav_fault_estimator.recording import project_typestore, read_topics
 from uav_fault_msgs.msg import FaultEstimate
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.node_tools import STREAM_QOS
@@ -47,14 +46,15 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     graph.spin(30.0, until=lambda: len(estimates) >= expected)
     assert recorder.stop(signal.SIGINT) == 0, recorder.output()
 
-    metrics = run_metrics(read_run(bag, typestore), scenario="short")
-    figures = plot_run(bag, typestore, tmp_path / "figures")
+    messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS))
+    metrics = report.run_metrics(report.run_from(messages, bag), scenario="short")
+    written = figures.plot_run(messages, tmp_path / "figures")
     print(metrics)
-    print("figures:", [(path.name, path.stat().st_size) for path in figures])
-    assert [path.name for path in figures] == [
+    print("figures:", [(path.name, path.stat().st_size) for path in written])
+    assert [path.name for path in written] == [
         "states.png", "track.png", "wind.png", "residuals.png", "sensitivity.png",
         "estimates.png"]
-    assert all(path.stat().st_size > 10_000 for path in figures)
+    assert all(path.stat().st_size > 10_000 for path in written)
     assert metrics["pipeline"]["messages_received"] == expected
     assert metrics["duration_s"] == pytest.approx(DURATION_S)
     assert list(metrics["faults"]) == list(PAPER_FAULT_NAMES)

@@ -12,26 +12,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from rosbags.rosbag2 import Reader
-from rosbags.typesys.store import Typestore
+from uav_sim.frames import north_east_m
 
-EARTH_RADIUS_M = 6378137.0
+from uav_fault_estimator.recording import stamp_seconds
+
 RESIDUAL_LABELS = ("x [m/s²]", "y [m/s²]", "z [m/s²]", "roll [rad/s²]", "pitch [rad/s²]",
                    "yaw [rad/s²]")
-
-
-def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dict[str, list]:
-    """The decoded messages of each topic, in recording order."""
-    messages: dict[str, list] = {topic: [] for topic in topics}
-    with Reader(bag) as reader:
-        wanted = [c for c in reader.connections if c.topic in messages]
-        for connection, _, raw in reader.messages(connections=wanted):
-            messages[connection.topic].append(typestore.deserialize_cdr(raw, connection.msgtype))
-    return messages
-
-
-def _stamps(messages: list) -> np.ndarray:
-    return np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in messages])
 
 
 def _save(figure: plt.Figure, path: Path) -> Path:
@@ -41,10 +27,16 @@ def _save(figure: plt.Figure, path: Path) -> Path:
     return path
 
 
-def plot_run(bag: Path, typestore: Typestore, out: Path) -> list[Path]:
-    """Write every figure of the run into out; the paths written."""
-    topics = ("/state", "/wind/filtered", "/residuals", "/faults/estimate", "/faults/seeded")
-    data = read_topics(bag, typestore, topics)
+TOPICS = ("/state", "/wind/filtered", "/residuals", "/faults/estimate", "/faults/seeded")
+
+
+def _stamps(messages: list) -> np.ndarray:
+    return np.array([stamp_seconds(m) for m in messages])
+
+
+def plot_run(data: dict[str, list], out: Path) -> list[Path]:
+    """Write every figure of a recording's messages (recording.read_topics of TOPICS) into
+    out; the paths written."""
     out.mkdir(parents=True, exist_ok=True)
     written = []
     state, t_state = data["/state"], _stamps(data["/state"])
@@ -62,10 +54,9 @@ def plot_run(bag: Path, typestore: Typestore, out: Path) -> list[Path]:
         axes[2].legend()
         axes[2].set_xlabel("simulation time [s]")
         written.append(_save(figure, out / "states.png"))
-        latitude0, longitude0 = state[0].latitude_rad, state[0].longitude_rad
-        north = [(m.latitude_rad - latitude0) * EARTH_RADIUS_M for m in state]
-        east = [(m.longitude_rad - longitude0) * EARTH_RADIUS_M * math.cos(latitude0)
-                for m in state]
+        north, east = north_east_m([m.latitude_rad for m in state],
+                                   [m.longitude_rad for m in state],
+                                   (state[0].latitude_rad, state[0].longitude_rad))
         figure, axis = plt.subplots(figsize=(6, 6))
         axis.plot(east, north)
         axis.set_xlabel("east [m]")

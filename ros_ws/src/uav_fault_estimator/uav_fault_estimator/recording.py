@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
@@ -56,3 +56,25 @@ class Recording:
         if self.writer is not None:
             self.writer.close()
             self.writer = None
+
+
+RECEIVED_NS = "received_ns"  # the key of read_topics' receive times
+
+
+def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dict[str, list]:
+    """The decoded messages of each topic of a recording, in recording order, and under
+    RECEIVED_NS the receive times [ns] of all of them."""
+    messages: dict[str, list] = {topic: [] for topic in topics}
+    received_ns: list[int] = []
+    with Reader(bag) as reader:
+        wanted = [c for c in reader.connections if c.topic in messages]
+        for connection, timestamp_ns, raw in reader.messages(connections=wanted):
+            messages[connection.topic].append(typestore.deserialize_cdr(raw, connection.msgtype))
+            received_ns.append(timestamp_ns)
+    messages[RECEIVED_NS] = received_ns
+    return messages
+
+
+def stamp_seconds(message) -> float:
+    """A decoded message's header stamp [s]."""
+    return message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec

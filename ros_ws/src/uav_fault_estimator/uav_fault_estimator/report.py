@@ -1,5 +1,5 @@
-"""A run's metrics.json (DESIGN.md) from its recording. No ROS here: rosbags reads the
-rosbag2 directory, metrics.py computes the figures."""
+"""A run's metrics.json (DESIGN.md) from its recording's messages (recording.read_topics).
+No ROS here: metrics.py computes the figures."""
 
 from __future__ import annotations
 
@@ -7,8 +7,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from rosbags.rosbag2 import Reader
-from rosbags.typesys.store import Typestore
 
 from uav_fault_estimator.metrics import (
     EstimateSeries,
@@ -16,10 +14,12 @@ from uav_fault_estimator.metrics import (
     fault_metrics,
     solver_metrics,
 )
+from uav_fault_estimator.recording import RECEIVED_NS, stamp_seconds
 
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
 STATE_TOPIC = "/state"
+TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC)
 
 
 @dataclass(frozen=True)
@@ -33,38 +33,28 @@ class Run:
     wall_s: float
 
 
-def _stamp_s(message) -> float:
-    return message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec
-
-
-def read_run(bag: Path, typestore: Typestore) -> Run:
-    """The estimate, seeded-fault and state streams of a recording; ValueError when one
-    is missing."""
-    rows: dict[str, list] = {ESTIMATE_TOPIC: [], SEEDED_TOPIC: [], STATE_TOPIC: []}
-    received_ns: list[int] = []
-    with Reader(bag) as reader:
-        wanted = [c for c in reader.connections if c.topic in rows]
-        for connection, timestamp_ns, raw in reader.messages(connections=wanted):
-            rows[connection.topic].append(typestore.deserialize_cdr(raw, connection.msgtype))
-            received_ns.append(timestamp_ns)
-    missing = [topic for topic, messages in rows.items() if not messages]
+def run_from(messages: dict[str, list], bag: Path) -> Run:
+    """The Run of a recording's messages (recording.read_topics of at least TOPICS);
+    ValueError naming the bag when a stream is missing."""
+    missing = [topic for topic in TOPICS if not messages.get(topic)]
     if missing:
         raise ValueError(f"{bag}: no messages on {', '.join(missing)}")
-    estimates, seeded = rows[ESTIMATE_TOPIC], rows[SEEDED_TOPIC]
+    estimates, seeded = messages[ESTIMATE_TOPIC], messages[SEEDED_TOPIC]
+    received_ns = messages[RECEIVED_NS]
     return Run(
         estimates=EstimateSeries(
             names=list(estimates[0].names),
-            stamps_s=np.array([_stamp_s(m) for m in estimates]),
+            stamps_s=np.array([stamp_seconds(m) for m in estimates]),
             values_pct=np.array([m.values_pct for m in estimates]),
             statuses=np.array([m.solver_status for m in estimates]),
             solve_times_ms=np.array([m.solve_time_ms for m in estimates]),
         ),
         seeded=SeededSeries(
             names=list(seeded[0].names),
-            stamps_s=np.array([_stamp_s(m) for m in seeded]),
+            stamps_s=np.array([stamp_seconds(m) for m in seeded]),
             values_pct=np.array([m.values_pct for m in seeded]),
         ),
-        duration_s=_stamp_s(rows[STATE_TOPIC][-1]),
+        duration_s=stamp_seconds(messages[STATE_TOPIC][-1]),
         wall_s=1e-9 * (max(received_ns) - min(received_ns)),
     )
 

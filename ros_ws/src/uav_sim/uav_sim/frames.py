@@ -1,4 +1,5 @@
-"""Rotations between the local North-East-Down frame and body axes."""
+"""Rotations between the local North-East-Down frame and body axes; positions north and
+east of an origin."""
 
 from __future__ import annotations
 
@@ -17,3 +18,15 @@ def ned_to_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray
             [cr * sp * cy + sr * sy, cr * sp * sy - sr * cy, cr * cp],
         ]
     )
+
+
+EARTH_RADIUS_M = 6378137.0  # WGS-84 equatorial; the flat-earth map spans a few km
+
+
+def north_east_m(latitude_rad, longitude_rad, origin_rad: tuple[float, float]) -> np.ndarray:
+    """Flat-earth north and east [m] of origin_rad (latitude, longitude) for scalars or
+    arrays of latitude and longitude [rad]; shape (2,) + the inputs' shape."""
+    latitude0, longitude0 = origin_rad
+    north = (np.asarray(latitude_rad) - latitude0) * EARTH_RADIUS_M
+    east = (np.asarray(longitude_rad) - longitude0) * EARTH_RADIUS_M * np.cos(latitude0)
+    return np.array([north, east])

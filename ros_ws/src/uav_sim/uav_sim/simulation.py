@@ -23,6 +23,7 @@ from uav_sim.aircraft import (
 )
 from uav_sim.autopilot import Autopilot, FlightState
 from uav_sim.channels import FAULT_NAMES, STATE_CHANNELS
+from uav_sim.frames import north_east_m
 from uav_sim.guidance import WaypointGuidance
 from uav_sim.propeller import Propeller
 from uav_sim.scenario import Scenario
@@ -35,7 +36,6 @@ from uav_sim.wind import (
 )
 
 CONTROL_STEPS = 4  # autopilot at 120 Hz: every 4th JSBSim step
-EARTH_RADIUS_M = 6378137.0  # WGS-84 equatorial; the flat-earth map spans a few km
 ENGINE_SPIN_UP_S = 3.0
 STATE_INTEGRATORS = tuple(
     f"simulation/integrator/{kind}/{motion}"
@@ -176,12 +176,9 @@ class Simulation:
         fdm["fcs/throttle-cmd-norm"] = commands.throttle
 
     def _position_ne_m(self) -> np.ndarray:
-        latitude0, longitude0 = self.origin_rad
-        north = (self.fdm["position/lat-geod-rad"] - latitude0) * EARTH_RADIUS_M
-        east = (
-            (self.fdm["position/long-gc-rad"] - longitude0) * EARTH_RADIUS_M * math.cos(latitude0)
+        return north_east_m(
+            self.fdm["position/lat-geod-rad"], self.fdm["position/long-gc-rad"], self.origin_rad
         )
-        return np.array([north, east])
 
     def _sample(self) -> Sample:
         fdm = self.fdm
