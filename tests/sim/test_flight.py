@@ -91,10 +91,11 @@ def test_filtered_wind_is_the_exact_discretisation_of_eq_4(default_scenario, def
 def test_seeded_faults_follow_the_scenario(default_scenario, default_flight):
     seeded = column(default_flight, "seeded_faults_pct")
     time_s = column(default_flight, "time_s")
-    assert seeded[time_s < 60.0, 0].max() == 0.0
-    assert seeded[np.isclose(time_s, 80.0), 0] == pytest.approx(5.0)  # halfway up its ramp
+    assert seeded[time_s < 50.0, 0].max() == 0.0
+    assert seeded[np.isclose(time_s, 70.0), 0] == pytest.approx(5.0)  # halfway up its ramp
     assert seeded[-1, 0] == pytest.approx(10.0)
-    assert seeded[np.isclose(time_s, 150.0), 3] == pytest.approx(25.0)  # a step
+    assert seeded[np.isclose(time_s, 109.95), 3] == 0.0
+    assert seeded[np.isclose(time_s, 110.0), 3] == pytest.approx(25.0)  # a step
 
 
 def test_sensor_dropout_is_nan_for_its_duration(default_scenario):

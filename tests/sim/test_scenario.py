@@ -29,7 +29,7 @@ def test_default_scenario_values(default_data):
     scenario = load_scenario(default_scenario_path())
     assert scenario.name == "default" and scenario.seed == default_data["seed"]
     assert scenario.faults_pct(0.0)["right_wing_lift_loss"] == 0.0
-    assert scenario.faults_pct(80.0)["right_wing_lift_loss"] == pytest.approx(5.0)
+    assert scenario.faults_pct(70.0)["right_wing_lift_loss"] == pytest.approx(5.0)
     assert scenario.faults_pct(300.0)["left_wing_drag_increase"] == pytest.approx(25.0)
 
 

@@ -43,13 +43,16 @@ def fly_and_estimate(
     scenario: Scenario,
     residual_overrides: Mapping[str, Any] | None = None,
     mhe_overrides: Mapping[str, Any] | None = None,
+    true_wind: bool = False,
 ) -> tuple[EstimateSeries, SeededSeries]:
     """Fly the scenario and estimate its faults every update_period_s [s] of sim time.
 
     The estimator's parameters are mhe_node's defaults, then the scenario's `estimator`
     overrides, then mhe_overrides. Returns the published estimates (what mhe_node would
     publish; solve times are the estimator's update times) and the seeded faults sampled
-    at the same stamps.
+    at the same stamps. true_wind: the models get the true wind (background and
+    turbulence) instead of the filtered estimate, which no aircraft has: a bound on what
+    better wind knowledge could give.
     """
     residual = {**node_defaults("residual_node"), **(residual_overrides or {})}
     mhe = {**node_defaults("mhe_node"), **scenario.estimator, **(mhe_overrides or {})}
@@ -61,8 +64,8 @@ def fly_and_estimate(
     stamps, values, statuses, times_ms, seeded = [], [], [], [], []
     sample = simulation.sample()
     while True:
-        result = generator.update(sample.time_s, sample.state, sample.controls,
-                                  sample.wind_filtered_ned_mps)
+        wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
+        result = generator.update(sample.time_s, sample.state, sample.controls, wind)
         on_grid = abs(sample.time_s / period_s - round(sample.time_s / period_s)) < 1e-9
         if result is not None and on_grid:
             estimate = estimator.update(result.residual, result.sensitivity, result.valid)

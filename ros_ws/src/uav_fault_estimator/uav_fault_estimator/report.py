@@ -78,3 +78,27 @@ def run_metrics(run: Run, scenario: str, update_period_s: float = 0.5,
             "messages_received": len(run.estimates.stamps_s),
         },
     }
+
+
+def table(metrics: dict) -> str:
+    """The per-fault figures and the run's, as aligned text."""
+    lines = [f"scenario {metrics['scenario']}: {metrics['duration_s']:g} s, settle "
+             f"{metrics['settle_s']:g} s, threshold {metrics['detection_threshold_pct']:g} %",
+             f"{'fault':<26}{'seeded':>8}{'final':>9}{'estimate':>10}{'rmse':>8}"
+             f"{'max err':>9}{'delay s':>9}"]
+    for name, fault in metrics["faults"].items():
+        delay = fault["detection_delay_s"]
+        lines.append(
+            f"{name:<26}{'yes' if fault['seeded'] else 'no':>8}"
+            f"{fault['seeded_final_pct']:>9.2f}{fault['estimate_final_pct']:>10.2f}"
+            f"{fault['rmse_pct']:>8.2f}{fault['max_abs_error_pct']:>9.2f}"
+            f"{'-' if delay is None else f'{delay:.1f}':>9}")
+    solver, pipeline = metrics["solver"], metrics["pipeline"]
+    lines += [
+        f"false alarms: {', '.join(metrics['false_alarms']) or 'none'}",
+        f"solver: {solver['solves']} solves, {solver['failures']} failures, median "
+        f"{solver['median_ms']} ms, p99 {solver['p99_ms']} ms, max {solver['max_ms']} ms",
+        f"pipeline: {pipeline['messages_received']}/{pipeline['messages_expected']} estimates,"
+        f" {pipeline['wall_s']} s wall, real-time factor {pipeline['real_time_factor']}",
+    ]
+    return "\n".join(lines)

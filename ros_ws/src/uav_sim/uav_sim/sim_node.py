@@ -44,6 +44,7 @@ PARAMETERS = {
     "wait_for_subscribers": "start once state has this many subscriptions and discovery settled",
 }
 ACK_TIMEOUT_S = 10.0
+ACK_POLL_S = 0.1  # wall time per wait for acknowledgements, between checks for SIGINT
 DISCOVERY_SETTLE_S = 0.5  # wall time with unchanged subscription counts before flying
 # Fast mode waits for acknowledgement every this many samples; in between, the reliable
 # keep-all writers hold what is not yet acknowledged, so nothing is lost.
@@ -92,9 +93,19 @@ class SimNode(Node):
         self.clock_publisher.publish(Clock(clock=stamp(time_s)))
 
     def wait_until_delivered(self) -> None:
-        """Block until every subscriber has acknowledged what was published (no loss)."""
+        """Block until every subscriber has acknowledged what was published (no loss), in
+        short slices so that SIGINT ends the wait; a subscriber that has not acknowledged
+        within ACK_TIMEOUT_S (it died, and discovery has not dropped it yet) is warned of
+        and not waited for any longer."""
+        deadline = time.monotonic() + ACK_TIMEOUT_S
+        poll = rclpy.duration.Duration(seconds=ACK_POLL_S)
         for publisher in self.stream_publishers:
-            publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=ACK_TIMEOUT_S))
+            while rclpy.ok() and not publisher.wait_for_all_acked(poll):
+                if time.monotonic() > deadline:
+                    self.get_logger().warning(
+                        f"{publisher.topic_name}: a subscriber has not acknowledged for "
+                        f"{ACK_TIMEOUT_S:g} s; going on without waiting for it")
+                    return
 
     def wait_for_subscribers(self) -> None:
         """Wait for the wanted subscriptions of `state`, then for discovery to settle.

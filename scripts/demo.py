@@ -1,0 +1,356 @@
+#!/usr/bin/env python3
+"""The main job: fly a scenario through the nodes, record every topic, report.
+
+    scripts/demo.sh [SCENARIO.yaml] [--out DIR]
+
+Starts recorder_node, mhe_node, residual_node and sim_node as processes (the executables
+`ros2 run` starts) on a ROS domain of the run's own, flies the scenario (default: the
+shipped default scenario) as fast as the nodes keep up, shows progress in simulated
+seconds, stops every node it started, then writes metrics.json and the figures from the
+recording (scripts/report.py) and prints the metrics as a table. DIR (default
+runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures and logs/
+(each node's output, <node>.log). The scenario's `estimator:` mapping overrides mhe_node's
+parameters.
+
+Exit status: 0 done; 1 a node ended on its own during the run (its name and exit status are
+printed; the recording so far is left readable) or the report failed; 2 a bad argument or
+scenario (one line, before any process starts); 130 interrupted (Ctrl-C, SIGTERM).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import signal
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import yaml
+from report import write_report
+from rosbags.rosbag2 import ReaderError
+from uav_fault_estimator.processes import (
+    RosProcess,
+    exit_status_text,
+    reserve_domain_id,
+    ros2_run_argv,
+    stop_all,
+)
+from uav_fault_estimator.report import table
+from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+UPDATE_PERIOD_S = 0.5  # residual_node's update_period_s: one estimate per residual
+PROGRESS_EVERY_S = 30.0  # of simulated time
+STARTUP_TIMEOUT_S = 60.0  # wall time for the nodes to start and find each other
+STALL_TIMEOUT_S = 60.0  # wall time without simulated time going on, once flying
+ESTIMATES_TIMEOUT_S = 30.0  # wall time for the last estimates after the simulator ended
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+RECORDER_GRACE_S = 1.0  # for the recorder to take the last estimates, as this node did
+
+
+class NodeEndedError(Exception):
+    """A node ended on its own while it should have run."""
+
+    def __init__(self, name: str, status: int) -> None:
+        super().__init__(f"{name} exited with {exit_status_text(status)}")
+        self.name, self.status = name, status
+
+
+class StalledError(Exception):
+    """Nothing happened for too long (the message says while doing what)."""
+
+
+class Progress:
+    """A hidden rclpy node of the demo: simulated time (/clock) and the estimates' count."""
+
+    def __init__(self) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rclpy.signals import SignalHandlerOptions
+        from rosgraph_msgs.msg import Clock
+        from uav_fault_msgs.msg import FaultEstimate
+        from uav_sim.node_tools import STREAM_QOS
+
+        self._rclpy = rclpy
+        self.context = rclpy.Context()
+        # Ctrl-C stays Python's KeyboardInterrupt, handled by the demo
+        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        self.node = rclpy.create_node("_demo", context=self.context,
+                                      start_parameter_services=False, enable_rosout=False)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.time_s = 0.0
+        self.estimates = 0
+        self.node.create_subscription(
+            Clock, "/clock", self._on_clock,
+            QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+        self.node.create_subscription(FaultEstimate, "faults/estimate", self._on_estimate,
+                                      STREAM_QOS)
+
+    def _on_clock(self, message: Any) -> None:
+        self.time_s = max(self.time_s, message.clock.sec + 1e-9 * message.clock.nanosec)
+
+    def _on_estimate(self, _message: Any) -> None:
+        self.estimates += 1
+
+    def subscriptions(self, topic: str) -> int:
+        return self.node.count_subscribers(topic)
+
+    def spin(self, timeout_s: float) -> None:
+        """Handle what has arrived, waiting up to timeout_s for the first callback."""
+        self.executor.spin_once(timeout_sec=timeout_s)
+        for _ in range(1000):  # a burst of estimates: take them all now
+            if not self._spin_ready():
+                break
+
+    def _spin_ready(self) -> bool:
+        before = (self.time_s, self.estimates)
+        self.executor.spin_once(timeout_sec=0.0)
+        return (self.time_s, self.estimates) != before
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self._rclpy.try_shutdown(context=self.context)
+
+
+class Demo:
+    """One run: the node processes, their watch, and their stop."""
+
+    def __init__(self, scenario: Scenario, out: Path, mhe_params: Path | None) -> None:
+        self.scenario = scenario
+        self.bag = out / "bag"
+        self.logs = out / "logs"
+        self.mhe_params = mhe_params
+        self.nodes: dict[str, RosProcess] = {}  # by executable, in start order
+        self.progress: Progress | None = None
+        self.next_report_s = PROGRESS_EVERY_S
+        self.expected = round(scenario.duration_s / UPDATE_PERIOD_S)
+
+    def start(self, package: str, executable: str, ros_args: list[str]) -> RosProcess:
+        process = RosProcess(ros2_run_argv(package, executable, ros_args),
+                             self.logs / f"{executable}.log")
+        self.nodes[executable] = process
+        return process
+
+    def watch(self, until: Callable[[], bool], timeout_s: float,
+              finished: tuple[str, ...] = ()) -> bool:
+        """Spin the demo's node and print progress until until() is true (True), or until
+        timeout_s of wall time pass without simulated time going on or an estimate coming
+        (False). NodeEndedError when a node ends, unless it is one of `finished` and ended
+        with status 0."""
+        progress = self.progress
+        assert progress is not None
+        last_seen, last_change = (progress.time_s, progress.estimates), time.monotonic()
+        while not until():
+            progress.spin(0.05)
+            self.report_progress()
+            for name, process in self.nodes.items():
+                status = process.process.poll()
+                if status is not None and not (name in finished and status == 0):
+                    raise NodeEndedError(name, status)
+            if (progress.time_s, progress.estimates) != last_seen:
+                last_seen, last_change = (progress.time_s, progress.estimates), time.monotonic()
+            elif time.monotonic() - last_change > timeout_s:
+                return False
+        return True
+
+    def report_progress(self, final: bool = False) -> None:
+        progress = self.progress
+        assert progress is not None
+        if final or self.next_report_s <= progress.time_s < self.scenario.duration_s:
+            print(f"  t = {progress.time_s:.0f} / {self.scenario.duration_s:g} s, "
+                  f"{progress.estimates} estimates", flush=True)
+            while self.next_report_s <= progress.time_s:
+                self.next_report_s += PROGRESS_EVERY_S
+
+    def fly(self) -> tuple[int, list[str]]:
+        """Start the nodes, fly, wait for the estimates, stop the nodes: how many estimates
+        the demo's node received, and which nodes ended badly when stopped. NodeEndedError
+        when a node ends on its own, StalledError when nothing happens for too long."""
+        self.progress = progress = Progress()
+        self.start("uav_fault_estimator", "recorder_node", ["-p", f"output_dir:={self.bag}"])
+        if not self.watch(self.bag.exists, STARTUP_TIMEOUT_S):
+            raise StalledError(
+                f"recorder_node did not create {self.bag} in {STARTUP_TIMEOUT_S:g} s")
+        self.start("uav_fault_estimator", "mhe_node",
+                   ["--params-file", str(self.mhe_params)] if self.mhe_params else [])
+        self.start("uav_fault_estimator", "residual_node", [])
+        # mhe_node and the recorder on residuals, the recorder and the demo on the estimates:
+        # then nothing that residual_node or mhe_node publishes can be missed
+        if not self.watch(lambda: progress.subscriptions("/residuals") >= 2
+                          and progress.subscriptions("/faults/estimate") >= 2,
+                          STARTUP_TIMEOUT_S):
+            raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
+        started = time.monotonic()
+        sim = self.start("uav_sim", "sim_node", [
+            "-p", f"scenario:={self.scenario.path}", "-p", "real_time_factor:=0.0",
+            "-p", "wait_for_subscribers:=2"])  # residual_node and the recorder on state
+        print(f"flying {self.scenario.duration_s:g} s of simulated time as fast as the nodes "
+              "keep up", flush=True)
+        if not self.watch(lambda: not sim.running(), STALL_TIMEOUT_S, finished=("sim_node",)):
+            raise StalledError(f"simulated time stood still for {STALL_TIMEOUT_S:g} s")
+        # the last estimates may still be on their way when the simulator ends
+        if not self.watch(lambda: progress.estimates >= self.expected, ESTIMATES_TIMEOUT_S,
+                          finished=("sim_node",)):
+            print(f"demo: {progress.estimates} of {self.expected} estimates arrived within "
+                  f"{ESTIMATES_TIMEOUT_S:g} s of the flight's end", file=sys.stderr)
+        grace_end = time.monotonic() + RECORDER_GRACE_S  # for the recorder to take them too
+        self.watch(lambda: time.monotonic() > grace_end, RECORDER_GRACE_S + 1.0,
+                   finished=("sim_node",))
+        self.report_progress(final=True)
+        print(f"flown in {time.monotonic() - started:.1f} s of wall time", flush=True)
+        return progress.estimates, self.stop()
+
+    def stop(self) -> list[str]:
+        """Stop the demo's node and every node process still running (SIGINT to each group
+        at once, SIGKILL to what remains after 10 s); the nodes that ended badly then."""
+        if self.progress is not None:
+            self.progress.close()
+            self.progress = None
+        running = {name: node for name, node in self.nodes.items() if node.running()}
+        statuses = stop_all(list(running.values()))
+        return [f"{name} exited with {exit_status_text(status)} when stopped"
+                for name, status in zip(running, statuses, strict=True) if status != 0]
+
+
+def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
+    """The scenario's `estimator:` overrides of mhe_node's parameters; ScenarioError for a
+    parameter mhe_node does not have. Integers given for real parameters become reals
+    (ROS parameters do not convert)."""
+    if not scenario.estimator:
+        return {}
+    from uav_sim.node_tools import default_parameters
+
+    defaults = default_parameters("uav_fault_estimator", "mhe_node.yaml")
+    overrides = {}
+    for name, value in scenario.estimator.items():
+        if name not in defaults:
+            raise ScenarioError(
+                f"scenario {scenario.path}: unknown key 'estimator.{name}' (mhe_node's "
+                f"parameters: {', '.join(sorted(defaults))})")
+        overrides[name] = _like(defaults[name], value)
+    return overrides
+
+
+def write_parameter_file(path: Path, parameters: dict[str, Any]) -> Path | None:
+    """A --params-file giving every node these parameters; None when there are none."""
+    if not parameters:
+        return None
+    path.write_text(yaml.safe_dump({"/**": {"ros__parameters": parameters}}))
+    return path
+
+
+def _like(default: Any, value: Any) -> Any:
+    """value, with integers made reals where the default is real."""
+    if isinstance(default, list) and isinstance(value, list) and default:
+        return [_like(default[0], item) for item in value]
+    if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(
+        prog="demo.sh", description=__doc__.splitlines()[0],
+        epilog="Exit status: 0 done, 1 a node or the report failed, 2 bad arguments or "
+        "scenario, 130 interrupted.")
+    parser.add_argument("scenario", nargs="?", type=Path,
+                        help="scenario YAML (default: the shipped default scenario)")
+    parser.add_argument("--out", type=Path,
+                        help="output directory (default: runs/<scenario name>/)")
+    arguments = parser.parse_args()
+    wall_started = time.monotonic()
+    # Ctrl-C and SIGTERM: KeyboardInterrupt, whatever the caller left (an ignored SIGINT
+    # would also be inherited by the nodes, which then could not be stopped cleanly)
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, signal.default_int_handler)
+
+    try:
+        scenario = load_scenario(arguments.scenario or default_scenario_path())
+        out = arguments.out or REPO_ROOT / "runs" / scenario.name
+        overrides = mhe_overrides(scenario)
+    except ScenarioError as error:
+        print(f"demo: {' '.join(str(error).split())}", file=sys.stderr)  # one line
+        return 2
+    scenario = replace(scenario, path=scenario.path.resolve())
+    out = out.resolve()
+    for previous in (out / "bag", out / "logs"):  # of an earlier run into the same folder
+        if previous.is_dir():
+            shutil.rmtree(previous)
+    (out / "logs").mkdir(parents=True)
+    mhe_params = write_parameter_file(out / "logs" / "mhe_node.params.yaml", overrides)
+
+    domain_id, lock = reserve_domain_id()
+    os.environ.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+                      ROS_LOG_DIR=str(out / "logs"))
+    print(f"demo: scenario '{scenario.name}' ({scenario.path}), ROS domain {domain_id}, "
+          f"output in {out}", flush=True)
+    demo = Demo(scenario, out, mhe_params)
+    try:
+        received, failed = demo.fly()
+    except NodeEndedError as ended:
+        print(f"demo: {ended.name} exited with {exit_status_text(ended.status)} during the "
+              f"run (log: {demo.logs / (ended.name + '.log')}); stopping the other nodes",
+              file=sys.stderr, flush=True)
+        _stop(demo)
+        _recorded(demo)
+        return 1
+    except StalledError as stalled:
+        print(f"demo: {stalled}; stopping the nodes (logs: {demo.logs})", file=sys.stderr,
+              flush=True)
+        _stop(demo)
+        return 1
+    except KeyboardInterrupt:
+        print("\ndemo: interrupted: stopping the nodes", file=sys.stderr, flush=True)
+        _stop(demo)
+        _recorded(demo)
+        return 130
+    finally:
+        _stop(demo)
+        lock.close()
+
+    for line in failed:
+        print(f"demo: {line}", file=sys.stderr)
+    try:
+        metrics, figures = write_report(demo.bag, out, scenario.name)
+    except (ValueError, FileNotFoundError, ReaderError) as error:
+        print(f"demo: no report: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("\ndemo: interrupted while writing the report", file=sys.stderr)
+        return 130
+    print()
+    print(table(metrics))
+    print(f"written to {out}: bag/, logs/, metrics.json, "
+          + ", ".join(path.name for path in figures))
+    print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time")
+    if received < demo.expected:
+        print(f"demo: only {received} of {demo.expected} estimates arrived", file=sys.stderr)
+    return 1 if failed or received < demo.expected else 0
+
+
+def _stop(demo: Demo) -> None:
+    """demo.stop(), not to be interrupted by a second Ctrl-C; says what ended badly."""
+    previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in STOP_SIGNALS}
+    try:
+        for line in demo.stop():
+            print(f"demo: {line}", file=sys.stderr)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _recorded(demo: Demo) -> None:
+    if demo.bag.exists():
+        print(f"demo: what was recorded is in {demo.bag}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
