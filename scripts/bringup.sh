@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Starts the nodes live (real time) for interactive use: sim_node, residual_node and
-# mhe_node, each with `ros2 run` in a process group of its own, their output in one folder.
+# Starts the nodes live (real time) for interactive use: sim_node, residual_node, mhe_node
+# and detector_node, each with `ros2 run` in a process group of its own, their output in
+# one folder.
 # Ctrl-C (or SIGTERM) stops them all: SIGINT to each group, SIGKILL to what remains after
 # a few seconds. A node ending on its own stops the others too (the simulator finishing
 # its scenario: exit status 0; any other node, or a failing simulator: 1).
@@ -62,9 +63,9 @@ mkdir -p "$logs"
 logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
 
-names=(sim_node residual_node mhe_node)
+names=(sim_node residual_node mhe_node detector_node)
 declare -A packages=([sim_node]=uav_sim [residual_node]=uav_fault_estimator
-                     [mhe_node]=uav_fault_estimator)
+                     [mhe_node]=uav_fault_estimator [detector_node]=uav_fault_estimator)
 declare -A pids=()
 
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:

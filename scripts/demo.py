@@ -3,11 +3,11 @@
 
     scripts/demo.sh [SCENARIO.yaml] [--out DIR]
 
-Starts recorder_node, mhe_node, residual_node and sim_node as processes (the executables
-`ros2 run` starts) on a ROS domain of the run's own, flies the scenario (default: the
-shipped default scenario) as fast as the nodes keep up, shows progress in simulated
-seconds, stops every node it started, then writes metrics.json and the figures from the
-recording (scripts/report.py) and prints the metrics as a table. DIR (default
+Starts recorder_node, mhe_node, residual_node, detector_node and sim_node as processes
+(the executables `ros2 run` starts) on a ROS domain of the run's own, flies the scenario
+(default: the shipped default scenario) as fast as the nodes keep up, shows progress in
+simulated seconds, stops every node it started, then writes metrics.json and the figures
+from the recording (scripts/report.py) and prints the metrics as a table. DIR (default
 runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures and logs/
 (each node's output, <node>.log). The scenario's `estimator:` mapping overrides mhe_node's
 parameters.
@@ -50,6 +50,7 @@ STARTUP_TIMEOUT_S = 60.0  # wall time for the nodes to start and find each other
 STALL_TIMEOUT_S = 60.0  # wall time without simulated time going on, once flying
 ESTIMATES_TIMEOUT_S = 30.0  # wall time for the last estimates after the simulator ended
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+STATE_SUBSCRIBERS = 3  # residual_node, detector_node and the recorder
 RECORDER_GRACE_S = 1.0  # for the recorder to take the last estimates, as this node did
 
 
@@ -182,16 +183,18 @@ class Demo:
         self.start("uav_fault_estimator", "mhe_node",
                    ["--params-file", str(self.mhe_params)] if self.mhe_params else [])
         self.start("uav_fault_estimator", "residual_node", [])
-        # mhe_node and the recorder on residuals, the recorder and the demo on the estimates:
-        # then nothing that residual_node or mhe_node publishes can be missed
+        self.start("uav_fault_estimator", "detector_node", [])
+        # mhe_node and the recorder on residuals, the recorder and the demo on the estimates,
+        # the recorder on the alarms: then nothing the nodes publish can be missed
         if not self.watch(lambda: progress.subscriptions("/residuals") >= 2
-                          and progress.subscriptions("/faults/estimate") >= 2,
+                          and progress.subscriptions("/faults/estimate") >= 2
+                          and progress.subscriptions("/faults/alarm") >= 1,
                           STARTUP_TIMEOUT_S):
             raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
         started = time.monotonic()
         sim = self.start("uav_sim", "sim_node", [
             "-p", f"scenario:={self.scenario.path}", "-p", "real_time_factor:=0.0",
-            "-p", "wait_for_subscribers:=2"])  # residual_node and the recorder on state
+            "-p", f"wait_for_subscribers:={STATE_SUBSCRIBERS}"])
         print(f"flying {self.scenario.duration_s:g} s of simulated time as fast as the nodes "
               "keep up", flush=True)
         if not self.watch(lambda: not sim.running(), STALL_TIMEOUT_S, finished=("sim_node",)):

@@ -10,7 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-NODE_NAMES = ("sim_node", "residual_node", "mhe_node", "recorder_node")
+NODE_NAMES = ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node")
 
 
 @dataclass(frozen=True)

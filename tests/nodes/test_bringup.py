@@ -39,7 +39,7 @@ def test_bringup_runs_the_nodes_and_ctrl_c_stops_them_all(
         output = bringup.output()
         assert str(logs) in output and "ros2 topic echo /uav2/faults/estimate" in output
         assert {path.name for path in logs.glob("*_node.log")} == {
-            "sim_node.log", "residual_node.log", "mhe_node.log"}
+            "sim_node.log", "residual_node.log", "mhe_node.log", "detector_node.log"}
 
         os.kill(bringup.pid, signal.SIGINT)  # the script only, not its group
         assert bringup.wait(15) == 130, bringup.output()

@@ -32,9 +32,9 @@ TWO_FAULTS = [
     {"name": "left_wing_drag_increase", "start_s": 60, "ramp_s": 0, "magnitude_pct": 25},
 ]
 FIGURES = ["states.png", "track.png", "wind.png", "residuals.png", "sensitivity.png",
-           "estimates.png"]
+           "estimates.png", "alarms.png"]
 METRICS_KEYS = {"scenario", "duration_s", "settle_s", "detection_threshold_pct", "faults",
-                "false_alarms", "solver", "pipeline"}
+                "false_alarms", "solver", "pipeline", "alarms"}
 FAULT_KEYS = {"seeded", "seeded_final_pct", "estimate_final_pct", "rmse_pct",
               "max_abs_error_pct", "detection_delay_s"}
 SOLVER_KEYS = {"name", "solves", "median_ms", "p99_ms", "max_ms", "failures"}
@@ -81,7 +81,7 @@ def check_metrics(out: Path) -> dict:
     assert metrics["solver"]["failures"] == 0
     for name in FIGURES:
         assert (out / name).stat().st_size > 10_000, name
-    for node in ("sim_node", "residual_node", "mhe_node", "recorder_node"):
+    for node in ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node"):
         assert (out / "logs" / f"{node}.log").exists(), node
     return metrics
 

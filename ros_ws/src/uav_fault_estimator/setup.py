@@ -28,6 +28,7 @@ setup(
             f"residual_node = {PACKAGE}.residual_node:main",
             f"mhe_node = {PACKAGE}.mhe_node:main",
             f"recorder_node = {PACKAGE}.recorder_node:main",
+            f"detector_node = {PACKAGE}.detector_node:main",
         ],
     },
 )

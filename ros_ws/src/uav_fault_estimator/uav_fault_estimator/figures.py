@@ -1,6 +1,7 @@
 """The run's figures (PNG) from a recording: states, north-east track, filtered wind,
-residuals, one sensitivity column, and each fault's estimate over its seeded value.
-matplotlib without a display (Agg); no ROS here."""
+residuals, one sensitivity column, each fault's estimate over its seeded value, and when
+detector_node ran, its statistics against their thresholds; its combined alarms are marked
+on the estimates too. matplotlib without a display (Agg); no ROS here."""
 
 from __future__ import annotations
 
@@ -27,7 +28,9 @@ def _save(figure: plt.Figure, path: Path) -> Path:
     return path
 
 
-TOPICS = ("/state", "/wind/filtered", "/residuals", "/faults/estimate", "/faults/seeded")
+TOPICS = ("/state", "/wind/filtered", "/residuals", "/faults/estimate", "/faults/seeded",
+          "/faults/alarm")
+ALARM_COLOR = "tab:red"
 
 
 def _stamps(messages: list) -> np.ndarray:
@@ -105,8 +108,56 @@ def plot_run(data: dict[str, list], out: Path) -> list[Path]:
                 axis.plot(_stamps(seeded), truth[:, seeded_names.index(name)], "k--",
                           label="seeded")
             axis.plot(_stamps(estimates), values[:, j], label="estimate")
+            _mark_alarms(axis, data.get("/faults/alarm") or [])
             axis.set_ylabel(f"{name} [%]", fontsize=8)
             axis.legend(fontsize=8)
         np.atleast_1d(axes)[-1].set_xlabel("simulation time [s]")
         written.append(_save(figure, out / "estimates.png"))
+    if data.get("/faults/alarm"):
+        written.append(_alarms_figure(data["/faults/alarm"], data["/faults/seeded"],
+                                      out / "alarms.png"))
     return written
+
+
+def _mark_alarms(axis: plt.Axes, alarms: list, label: str = "combined alarm") -> None:
+    """Shade the samples at which detector_node's combined alarm was raised."""
+    raised = [stamp_seconds(m) for m in alarms if m.combined_alarm]
+    for k, time_s in enumerate(raised):
+        axis.axvspan(time_s - 0.1, time_s + 0.1, color=ALARM_COLOR, alpha=0.3,
+                     label=label if k == 0 else None)
+
+
+def _alarms_figure(alarms: list, seeded: list, path: Path) -> Path:
+    """Each GLRT statistic and the largest parameter deviation over their thresholds (log
+    scale), the combined alarms shaded, the first seeded fault's start dashed."""
+    times = _stamps(alarms)
+    names = list(alarms[0].channel_names)
+    statistic = np.array([m.statistic for m in alarms])
+    deviation = np.array([m.parameter_deviation for m in alarms])
+    figure, axes = plt.subplots(len(names) + 1, 1, figsize=(9, 2.2 * (len(names) + 1)),
+                                sharex=True)
+    rows = [(f"GLRT {name}", statistic[:, k], [m.threshold[k] for m in alarms])
+            for k, name in enumerate(names)]
+    rows.append(("parameter deviation", deviation.max(axis=1),  # NaN until settled
+                 [m.parameter_threshold for m in alarms]))
+    onset = _first_fault_start(seeded)
+    for axis, (label, values, threshold) in zip(axes, rows, strict=True):
+        axis.semilogy(times, np.where(values > 0, values, np.nan), label="statistic")
+        axis.semilogy(times, threshold, "k:", label="threshold")
+        _mark_alarms(axis, alarms)
+        if onset is not None:
+            axis.axvline(onset, color="k", linestyle="--", label="fault starts")
+        axis.set_ylabel(label, fontsize=8)
+    axes[0].legend(fontsize=8, loc="upper left")
+    axes[0].set_title(f"detector_node: designed P_FA {alarms[0].false_alarm_probability:g} "
+                      "per sample and test")
+    axes[-1].set_xlabel("simulation time [s]")
+    return _save(figure, path)
+
+
+def _first_fault_start(seeded: list) -> float | None:
+    """The first stamp at which any seeded fault is non-zero; None if none ever is."""
+    for message in seeded:
+        if any(value != 0.0 for value in message.values_pct):
+            return stamp_seconds(message)
+    return None

@@ -5,6 +5,8 @@ benchmarks; metrics.py turns the result into metrics.json's figures."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -13,7 +15,7 @@ import numpy as np
 import yaml
 from ament_index_python.packages import get_package_share_directory
 from uav_sim.channels import FAULT_NAMES
-from uav_sim.scenario import Scenario
+from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
 from uav_fault_estimator.estimator_config import config_from_parameters
@@ -83,3 +85,43 @@ def fly_and_estimate(
                        np.array(statuses), np.array(times_ms)),
         SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
     )
+
+
+def fly_on_grid(scenario: Scenario, period_s: float) -> tuple[np.ndarray, ...]:
+    """The scenario's samples every period_s [s] of simulation time (a multiple of the
+    sensor period): times (K,) [s], states (K, 14), controls (K, 7), seeded faults (K, 7) [%],
+    in uav_sim.channels order."""
+    simulation = Simulation(scenario)
+    every = round(period_s / simulation.period_s)
+    if every < 1 or abs(every * simulation.period_s - period_s) > 1e-9:
+        raise ValueError(f"{period_s} s is not a multiple of the sensor period "
+                         f"{simulation.period_s} s")
+    samples = [simulation.sample()]
+    while not simulation.finished:
+        sample = simulation.step()
+        if simulation.sample_count % every == 0:
+            samples.append(sample)
+    return (np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
+            np.array([s.controls for s in samples]),
+            np.array([s.seeded_faults_pct for s in samples]))
+
+
+def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,
+                 wind_speed_mps: float) -> Scenario:
+    """The scenario with another turbulence seed and a horizontal background wind of
+    wind_speed_mps [m/s] blowing towards wind_direction_deg [deg from north]."""
+    direction = math.radians(wind_direction_deg)
+    wind = dataclasses.replace(scenario.wind, north_mps=wind_speed_mps * math.cos(direction),
+                               east_mps=wind_speed_mps * math.sin(direction))
+    return dataclasses.replace(scenario, seed=seed, wind=wind)
+
+
+def fault_free_flights(count: int, first_seed: int,
+                       first_direction_deg: float = 0.0) -> list[Scenario]:
+    """count variants of the shipped fault_free scenario (the default flight, moderate
+    turbulence): turbulence seeds from first_seed, background winds of 5.0-6.25 m/s (20-25 %
+    of airspeed) towards directions 360/count degrees apart from first_direction_deg. The
+    detector's calibration flights and, with other seeds, its held-out test flights."""
+    base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
+    return [wind_variant(base, first_seed + i, first_direction_deg + 360.0 * i / count,
+                         5.0 + 0.25 * (i % 6)) for i in range(count)]

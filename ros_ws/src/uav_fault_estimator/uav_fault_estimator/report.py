@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from uav_fault_estimator.metrics import (
+    AlarmSeries,
     EstimateSeries,
     SeededSeries,
+    alarm_metrics,
     fault_metrics,
     solver_metrics,
 )
@@ -19,24 +21,28 @@ from uav_fault_estimator.recording import RECEIVED_NS, stamp_seconds
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
 STATE_TOPIC = "/state"
-TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC)
+ALARM_TOPIC = "/faults/alarm"  # optional: only when detector_node ran
+TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC, ALARM_TOPIC)
+REQUIRED_TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC)
 
 
 @dataclass(frozen=True)
 class Run:
     """What a recording holds for the metrics: estimates, seeded faults, the flight's
-    simulated duration [s] and the wall time the recording spans [s]."""
+    simulated duration [s], the wall time the recording spans [s], and the detector's
+    alarms (None when it did not run)."""
 
     estimates: EstimateSeries
     seeded: SeededSeries
     duration_s: float
     wall_s: float
+    alarms: AlarmSeries | None = None
 
 
 def run_from(messages: dict[str, list], bag: Path) -> Run:
     """The Run of a recording's messages (recording.read_topics of at least TOPICS);
     ValueError naming the bag when a stream is missing."""
-    missing = [topic for topic in TOPICS if not messages.get(topic)]
+    missing = [topic for topic in REQUIRED_TOPICS if not messages.get(topic)]
     if missing:
         raise ValueError(f"{bag}: no messages on {', '.join(missing)}")
     estimates, seeded = messages[ESTIMATE_TOPIC], messages[SEEDED_TOPIC]
@@ -56,6 +62,21 @@ def run_from(messages: dict[str, list], bag: Path) -> Run:
         ),
         duration_s=stamp_seconds(messages[STATE_TOPIC][-1]),
         wall_s=1e-9 * (max(received_ns) - min(received_ns)),
+        alarms=alarm_series(messages.get(ALARM_TOPIC) or []),
+    )
+
+
+def alarm_series(alarms: list) -> AlarmSeries | None:
+    """The FaultAlarm messages as an AlarmSeries; None for none."""
+    if not alarms:
+        return None
+    return AlarmSeries(
+        channel_names=list(alarms[0].channel_names),
+        stamps_s=np.array([stamp_seconds(m) for m in alarms]),
+        alarm=np.array([m.alarm for m in alarms], dtype=bool),
+        parameter_alarm=np.array([m.parameter_alarm for m in alarms], dtype=bool),
+        combined_alarm=np.array([m.combined_alarm for m in alarms], dtype=bool),
+        false_alarm_probability=float(alarms[0].false_alarm_probability),
     )
 
 
@@ -77,6 +98,7 @@ def run_metrics(run: Run, scenario: str, update_period_s: float = 0.5,
             "messages_expected": round(run.duration_s / update_period_s),
             "messages_received": len(run.estimates.stamps_s),
         },
+        "alarms": alarm_metrics(run.alarms, run.seeded) if run.alarms else None,
     }
 
 
@@ -101,4 +123,15 @@ def table(metrics: dict) -> str:
         f"pipeline: {pipeline['messages_received']}/{pipeline['messages_expected']} estimates,"
         f" {pipeline['wall_s']} s wall, real-time factor {pipeline['real_time_factor']}",
     ]
+    alarms = metrics.get("alarms")
+    if alarms:
+        lines.append(f"detector: P_FA {alarms['false_alarm_probability']:g} per sample; "
+                     f"{alarms['fault_free_samples']} fault-free samples")
+        lines += [f"  {name:<11} fault-free alarms {test['fault_free_alarms']:>4}, first alarm "
+                  f"after the fault {_seconds(test['first_alarm_delay_s'])}"
+                  for name, test in alarms["tests"].items()]
     return "\n".join(lines)
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f} s"

@@ -1,0 +1,125 @@
+"""detector_node: fast control-surface fault alarms from self-tuning residual generators.
+
+Subscribes `state` and `controls` (matched by stamp); on the calibration's sample grid
+(every 0.2 s of sim time) runs the three RLS residual generators, their GLRT and the
+parameter-deviation test (self_tuning.py; Blanke & Hansen) and publishes `faults/alarm`
+(FaultAlarm, stamped like the sample), and `/diagnostics`.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from rclpy.node import Node
+from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultAlarm
+from uav_sim.messages import controls_array, header, state_array
+from uav_sim.node_tools import (
+    ERROR,
+    OK,
+    STREAM_QOS,
+    WARN,
+    Diagnostics,
+    declare_parameters,
+    run_node,
+)
+
+from uav_fault_estimator.self_tuning import (
+    CHANNELS,
+    DetectorSample,
+    SelfTuningDetector,
+    load_calibration,
+)
+from uav_fault_estimator.stamp_matching import StampMatcher
+
+PARAMETERS = {
+    "calibration_file": "detector calibration YAML; empty: the package's "
+                        "config/detector_calibration.yaml",
+    "window": "M: GLRT window [samples]; must be the calibration's",
+    "forgetting_factor": "lambda_f of the RLS; must be the calibration's",
+    "false_alarm_probability": "designed P_FA per sample of each test (eq. 23-25)",
+}
+# Subscribed in this order: sim_node's wait_for_subscribers counts `state` subscriptions.
+STREAMS = {"controls": ControlInputs, "state": AircraftState}
+TO_ARRAY = {"state": state_array, "controls": controls_array}
+
+
+class DetectorNode(Node):
+    """Thin adapter: messages matched by stamp, one core update per sample, publication."""
+
+    def __init__(self) -> None:
+        super().__init__("detector_node")
+        p = declare_parameters(self, "uav_fault_estimator", "detector_node.yaml", PARAMETERS)
+        calibration = load_calibration(p["calibration_file"], p["window"],
+                                       p["forgetting_factor"])
+        self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
+        self.matcher = StampMatcher(tuple(STREAMS))
+        self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", STREAM_QOS)
+        for topic, message_type in STREAMS.items():
+            self.create_subscription(
+                message_type, topic, lambda message, topic=topic: self.on_message(topic, message),
+                STREAM_QOS,
+            )
+        self.diagnostics = Diagnostics(self)
+        self.counts = {"published": 0, "skipped_samples": 0, "stamp_resets": 0,
+                       "combined_alarms": 0}
+
+    def on_message(self, topic: str, message) -> None:
+        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        if self.matcher.is_backwards(stamp_ns):
+            self.get_logger().warning(
+                f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"
+                " the source restarted, generators reset to the calibration")
+            self.matcher.reset()
+            self.detector.reset()
+            self.counts["stamp_resets"] += 1
+        for sample_ns, payloads in self.matcher.add(topic, stamp_ns, TO_ARRAY[topic](message)):
+            self.process(sample_ns / 1e9, payloads)
+
+    def process(self, time_s: float, payloads: dict) -> None:
+        if not self.detector.on_grid(time_s):
+            return
+        sample = self.detector.update(time_s, payloads["state"], payloads["controls"])
+        if sample is None:
+            self.counts["skipped_samples"] += 1
+            self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
+                                    "missing)", self.counts)
+            return
+        self.publisher.publish(self.message(sample))
+        self.counts["published"] += 1
+        self.counts["combined_alarms"] += int(sample.combined_alarm)
+        self.report(sample)
+
+    def message(self, sample: DetectorSample) -> FaultAlarm:
+        return FaultAlarm(
+            header=header(sample.time_s),
+            channel_names=list(CHANNELS),
+            statistic=sample.statistic.tolist(),
+            threshold=sample.threshold.tolist(),
+            alarm=sample.alarm.tolist(),
+            parameter_deviation=sample.parameter_deviation.tolist(),
+            parameter_threshold=sample.parameter_threshold,
+            parameter_alarm=sample.parameter_alarm,
+            combined_alarm=sample.combined_alarm,
+            false_alarm_probability=self.detector.false_alarm_probability,
+        )
+
+    def report(self, sample: DetectorSample) -> None:
+        alarms = [name for name, on in zip(CHANNELS, sample.alarm, strict=True) if on]
+        if sample.combined_alarm:
+            level, text = ERROR, "control-surface fault: GLRT and parameters agree"
+        elif alarms or sample.parameter_alarm:
+            level, text = WARN, "one test alarms: " + ", ".join(
+                alarms + (["parameters"] if sample.parameter_alarm else []))
+        else:
+            level, text = OK, "no alarm"
+        self.diagnostics.update(level, text, {
+            **self.counts, **{f"{name}_theta": " ".join(f"{v:.4g}" for v in theta)
+                              for name, theta in sample.theta.items()}})
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node("detector_node", DetectorNode, args=args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
