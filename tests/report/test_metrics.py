@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from uav_fault_estimator.metrics import (
+    AlarmSeries,
     EstimateSeries,
     SeededSeries,
+    alarm_metrics,
     fault_metrics,
     solver_metrics,
 )
@@ -65,3 +67,26 @@ def test_solver_figures_count_failures_but_not_waiting():
     assert solver["solves"] == 600 - 20 - 1 and solver["failures"] == 1
     assert solver["median_ms"] == pytest.approx(np.median(solved_times), abs=1e-3)
     assert solver["max_ms"] == pytest.approx(1.2, abs=1e-3)
+
+
+@pytest.mark.timeout(30)
+def test_alarm_counts_rates_and_delays():
+    """Tested from 30 s (the RLS settling), the ramp fault starts at 60 s: 150 fault-free
+    tested samples at 0.2 s. Roll alarms at 40 s (fault-free) and from 65 s; the parameters
+    only at 61 s; the combined alarm never."""
+    stamps = np.round(np.arange(1, 1501) * 0.2, 6)
+    roll = (stamps == 40.0) | (stamps >= 65.0)
+    alarms = AlarmSeries(
+        channel_names=["roll"], stamps_s=stamps, alarm=roll[:, None],
+        parameter_alarm=stamps == 61.0, combined_alarm=np.zeros(stamps.size, dtype=bool),
+        tested=stamps >= 30.0, false_alarm_probability=0.01)
+    seeded = SeededSeries(NAMES, SEEDED_STAMPS, seeded_pct(SEEDED_STAMPS))
+    summary = alarm_metrics(alarms, seeded)
+    assert summary["fault_start_s"] == pytest.approx(60.0)
+    assert summary["fault_free_samples"] == 150
+    assert summary["tests"]["roll"] == {"fault_free_alarms": 1,
+                                        "fault_free_alarm_rate": round(1 / 150, 5),
+                                        "first_alarm_delay_s": pytest.approx(5.0)}
+    assert summary["tests"]["parameters"]["first_alarm_delay_s"] == pytest.approx(1.0)
+    assert summary["tests"]["combined"] == {"fault_free_alarms": 0, "fault_free_alarm_rate": 0.0,
+                                            "first_alarm_delay_s": None}

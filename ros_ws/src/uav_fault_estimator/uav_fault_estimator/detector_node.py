@@ -23,13 +23,13 @@ from uav_sim.node_tools import (
     run_node,
 )
 
+from uav_fault_estimator.matched_streams import MatchedStreams
 from uav_fault_estimator.self_tuning import (
     CHANNELS,
     DetectorSample,
     SelfTuningDetector,
     load_calibration,
 )
-from uav_fault_estimator.stamp_matching import StampMatcher
 
 PARAMETERS = {
     "calibration_file": "detector calibration YAML; empty: the package's "
@@ -38,9 +38,8 @@ PARAMETERS = {
     "forgetting_factor": "lambda_f of the RLS; must be the calibration's",
     "false_alarm_probability": "designed P_FA per sample of each test (eq. 23-25)",
 }
-# Subscribed in this order: sim_node's wait_for_subscribers counts `state` subscriptions.
-STREAMS = {"controls": ControlInputs, "state": AircraftState}
-TO_ARRAY = {"state": state_array, "controls": controls_array}
+# `state` last: see MatchedStreams
+STREAMS = {"controls": (ControlInputs, controls_array), "state": (AircraftState, state_array)}
 
 
 class DetectorNode(Node):
@@ -52,28 +51,11 @@ class DetectorNode(Node):
         calibration = load_calibration(p["calibration_file"], p["window"],
                                        p["forgetting_factor"])
         self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
-        self.matcher = StampMatcher(tuple(STREAMS))
         self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", STREAM_QOS)
-        for topic, message_type in STREAMS.items():
-            self.create_subscription(
-                message_type, topic, lambda message, topic=topic: self.on_message(topic, message),
-                STREAM_QOS,
-            )
+        self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,
+                                      "generators reset to the calibration")
         self.diagnostics = Diagnostics(self)
-        self.counts = {"published": 0, "skipped_samples": 0, "stamp_resets": 0,
-                       "combined_alarms": 0}
-
-    def on_message(self, topic: str, message) -> None:
-        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-        if self.matcher.is_backwards(stamp_ns):
-            self.get_logger().warning(
-                f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"
-                " the source restarted, generators reset to the calibration")
-            self.matcher.reset()
-            self.detector.reset()
-            self.counts["stamp_resets"] += 1
-        for sample_ns, payloads in self.matcher.add(topic, stamp_ns, TO_ARRAY[topic](message)):
-            self.process(sample_ns / 1e9, payloads)
+        self.counts = {"published": 0, "skipped_samples": 0, "combined_alarms": 0}
 
     def process(self, time_s: float, payloads: dict) -> None:
         if not self.detector.on_grid(time_s):
@@ -82,7 +64,7 @@ class DetectorNode(Node):
         if sample is None:
             self.counts["skipped_samples"] += 1
             self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
-                                    "missing)", self.counts)
+                                    "missing)", self.health())
             return
         self.publisher.publish(self.message(sample))
         self.counts["published"] += 1
@@ -113,8 +95,13 @@ class DetectorNode(Node):
         else:
             level, text = OK, "no alarm"
         self.diagnostics.update(level, text, {
-            **self.counts, **{f"{name}_theta": " ".join(f"{v:.4g}" for v in theta)
+            **self.health(), **{f"{name}_theta": " ".join(f"{v:.4g}" for v in theta)
                               for name, theta in sample.theta.items()}})
+
+
+    def health(self) -> dict[str, int]:
+        return {**self.counts, "stamp_resets": self.streams.restarts,
+                "dropped_incomplete_samples": self.streams.dropped_sets}
 
 
 def main(args: list[str] | None = None) -> int:

@@ -102,31 +102,34 @@ def solver_metrics(estimates: EstimateSeries) -> dict:
 @dataclass(frozen=True)
 class AlarmSeries:
     """What detector_node published: stamps (K,) [s]; per-channel GLRT alarms (K, c), the
-    parameter alarm (K,) and the combined alarm (K,); the designed P_FA."""
+    parameter alarm (K,) and the combined alarm (K,); whether the tests ran (K,) (not while
+    the window fills and the RLS settles); the designed P_FA."""
 
     channel_names: Sequence[str]
     stamps_s: np.ndarray
     alarm: np.ndarray
     parameter_alarm: np.ndarray
     combined_alarm: np.ndarray
+    tested: np.ndarray
     false_alarm_probability: float
 
 
 def alarm_metrics(alarms: AlarmSeries, seeded: SeededSeries) -> dict:
     """Per test (each GLRT channel, the parameters, the combined alarm): the alarms in
-    fault-free time (before the first seeded fault starts, or the whole flight), as a count
-    and as a rate per sample to hold against the designed P_FA, and the first alarm's
-    delay after that start."""
+    fault-free time (tested samples before the first seeded fault starts, or the whole
+    flight), as a count and as a rate per sample to hold against the designed P_FA, and the
+    first alarm's delay after that start."""
     starts = [start for name in seeded.names if (start := seeded.start_s(name)) is not None]
     fault_start_s = min(starts) if starts else None
-    fault_free = (alarms.stamps_s < fault_start_s if fault_start_s is not None
-                  else np.ones(alarms.stamps_s.size, dtype=bool))
+    before = (alarms.stamps_s < fault_start_s if fault_start_s is not None
+              else np.ones(alarms.stamps_s.size, dtype=bool))
+    fault_free = before & alarms.tested
     tests = {name: alarms.alarm[:, k] for k, name in enumerate(alarms.channel_names)}
     tests |= {"parameters": alarms.parameter_alarm, "combined": alarms.combined_alarm}
     summary = {}
     for name, raised in tests.items():
         raised = np.asarray(raised, dtype=bool)
-        after = raised & ~fault_free
+        after = raised & ~before
         summary[name] = {
             "fault_free_alarms": int(raised[fault_free].sum()),
             "fault_free_alarm_rate": round(float(raised[fault_free].mean()), 5)

@@ -76,6 +76,7 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
         alarm=np.array([m.alarm for m in alarms], dtype=bool),
         parameter_alarm=np.array([m.parameter_alarm for m in alarms], dtype=bool),
         combined_alarm=np.array([m.combined_alarm for m in alarms], dtype=bool),
+        tested=np.array([np.isfinite(m.statistic).all() for m in alarms], dtype=bool),
         false_alarm_probability=float(alarms[0].false_alarm_probability),
     )
 

@@ -22,9 +22,9 @@ from uav_sim.node_tools import (
     run_node,
 )
 
+from uav_fault_estimator.matched_streams import MatchedStreams
 from uav_fault_estimator.prediction import aircraft_predictor_factory
 from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, ResidualGenerator, ResidualSample
-from uav_fault_estimator.stamp_matching import StampMatcher
 
 PARAMETERS = {
     "fault_names": "faults whose sensitivities are computed: the columns of S",
@@ -35,12 +35,11 @@ PARAMETERS = {
     "recovery_s": "rows stay invalid this long after a missing channel is back [s]",
     "wind_error_step_mps": "secant step of the wind-error columns of S; 0: none [m/s]",
 }
-# Subscribed in this order: sim_node's wait_for_subscribers counts the subscriptions of
-# `state`, so state comes last, when the others exist already.
-STREAMS = {"controls": ControlInputs, "wind/filtered": WindEstimate, "state": AircraftState}
+# `state` last: see MatchedStreams
+STREAMS = {"controls": (ControlInputs, controls_array),
+           "wind/filtered": (WindEstimate, wind_array), "state": (AircraftState, state_array)}
 # Stamps within this fraction of a period of the publication grid count as on it.
 STAMP_TOLERANCE = 1e-6
-TO_ARRAY = {"state": state_array, "controls": controls_array, "wind/filtered": wind_array}
 
 
 class ResidualNode(Node):
@@ -58,31 +57,17 @@ class ResidualNode(Node):
             aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
             p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
         )
-        self.matcher = StampMatcher(tuple(STREAMS))
         self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
-        for topic, message_type in STREAMS.items():
-            self.create_subscription(
-                message_type, topic, lambda message, topic=topic: self.on_message(topic, message),
-                STREAM_QOS,
-            )
+        self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset")
         self.diagnostics = Diagnostics(self)
         self.next_publish_s: float | None = None
-        self.counts = {"samples": 0, "published": 0, "stamp_resets": 0, "rejected_samples": 0}
+        self.counts = {"samples": 0, "published": 0, "rejected_samples": 0}
         self.core_time_s = 0.0
 
-    def on_message(self, topic: str, message) -> None:
-        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-        if self.matcher.is_backwards(stamp_ns):
-            self.get_logger().warning(
-                f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"
-                " the source restarted, filters reset"
-            )
-            self.matcher.reset()
-            self.generator.reset()
-            self.next_publish_s = None
-            self.counts["stamp_resets"] += 1
-        for sample_ns, payloads in self.matcher.add(topic, stamp_ns, TO_ARRAY[topic](message)):
-            self.process(sample_ns / 1e9, payloads)
+    def restart(self) -> None:
+        """The source restarted: the filters from scratch."""
+        self.generator.reset()
+        self.next_publish_s = None
 
     def process(self, time_s: float, payloads: dict) -> None:
         """One core update; publishes when the update period is due."""
@@ -125,7 +110,8 @@ class ResidualNode(Node):
         """Counters and cost for /diagnostics."""
         return {
             **self.counts,
-            "dropped_incomplete_samples": self.matcher.dropped_sets,
+            "stamp_resets": self.streams.restarts,
+            "dropped_incomplete_samples": self.streams.dropped_sets,
             "core_ms_per_sample": f"{1e3 * self.core_time_s / max(self.counts['samples'], 1):.3f}",
         }
 
