@@ -24,6 +24,7 @@ class RosGraph:
         )
         self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        self.subscriptions: dict[str, Any] = {}
 
     def topic_types(self) -> dict[str, list[str]]:
         return dict(self.node.get_topic_names_and_types())
@@ -41,8 +42,16 @@ class RosGraph:
         """Start collecting every topic's messages into lists, filled while spin() runs."""
         received: dict[str, list[Any]] = {topic: [] for topic in topics}
         for topic, message_type in topics.items():
-            self.node.create_subscription(message_type, topic, received[topic].append, qos)
+            self.subscriptions[topic] = self.node.create_subscription(
+                message_type, topic, received[topic].append, qos)
         return received
+
+    def wait_for_publishers(self, topic: str, count: int, timeout_s: float) -> bool:
+        """Whether the subscription of topic (subscribe()) has been matched with at least
+        count publishers within timeout_s: from then on nothing they publish is missed."""
+        self.spin(timeout_s, until=lambda: self.subscriptions[topic].get_publisher_count()
+                  >= count)
+        return self.subscriptions[topic].get_publisher_count() >= count
 
     def spin(self, duration_s: float, until: Any = None) -> None:
         """Process callbacks for duration_s, or until until() is true."""
@@ -53,6 +62,7 @@ class RosGraph:
     def unsubscribe_all(self) -> None:
         for subscription in list(self.node.subscriptions):
             self.node.destroy_subscription(subscription)
+        self.subscriptions.clear()
 
     def close(self) -> None:
         self.executor.shutdown()

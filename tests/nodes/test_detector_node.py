@@ -30,6 +30,7 @@ DURATION_S = 60.0  # the RLS settles after 30 s: half of the flight is tested
 def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, start_process):
     alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
+    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
     scenario = short_scenario(DURATION_S)
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
         "-p", f"scenario:={scenario}", "-p", "real_time_factor:=0.0",

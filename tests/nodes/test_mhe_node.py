@@ -28,6 +28,7 @@ def test_estimates_follow_the_residuals_and_find_a_lift_loss(short_scenario, gra
     received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
     estimates = received["/faults/estimate"]
     start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
+    assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[

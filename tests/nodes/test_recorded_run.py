@@ -32,6 +32,7 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
         "-p", f"output_dir:={bag}"]), "recorder_node")
     assert wait_until(lambda: bag.exists() or not recorder.running(), timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
+    assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[

@@ -44,6 +44,7 @@ def test_residuals_every_half_second_with_dropout_and_restart(
                       ros_args=["-p", f"recovery_s:={RECOVERY_S}"]),
         "residual_node",
     )
+    assert graph.wait_for_publishers("/residuals", 1, timeout_s=30)
     fly(start_process, short_scenario(FIRST_S, sensor_dropouts=[PITCH_RATE_DROPOUT]), "first")
     first = round(FIRST_S / PERIOD_S)
     graph.spin(30.0, until=lambda: len(received) >= first)
