@@ -122,6 +122,12 @@ def _weibull_dict(distribution: Weibull) -> dict[str, float]:
     return {"scale": distribution.scale, "shape": distribution.shape}
 
 
+def parameter_deviation(theta: np.ndarray, channel: ChannelCalibration) -> np.ndarray:
+    """The largest |theta_i - mean_i| / std_i over a channel's parameters (section III.C);
+    theta (n,) or (K, n) for K samples."""
+    return np.max(np.abs(theta - channel.parameter_mean) / channel.parameter_std, axis=-1)
+
+
 @dataclass(frozen=True)
 class DetectorSample:
     """One detector step: per channel (CHANNELS order) residual, GLRT statistic (NaN while
@@ -191,8 +197,8 @@ class SelfTuningDetector:
             g = self.glrt[name].update(step.prediction_error)
             residual.append(step.prediction_error)
             statistic.append(g if g is not None and settled else math.nan)
-            deviation.append(float(np.max(np.abs(step.theta - channel.parameter_mean)
-                                          / channel.parameter_std)) if settled else math.nan)
+            deviation.append(float(parameter_deviation(step.theta, channel))
+                             if settled else math.nan)
             theta[name] = step.theta
         statistic, deviation = np.array(statistic), np.array(deviation)
         alarm = statistic > self.thresholds  # NaN compares False
@@ -257,27 +263,27 @@ def fit_initial_parameters(flights: Iterable[tuple[np.ndarray, np.ndarray]],
 def calibrate(flights: list[tuple[np.ndarray, np.ndarray, np.ndarray]], sample_period_s: float,
               forgetting_factor: float, window: int, settle_s: float) -> Calibration:
     """The calibration from fault-free flights (times (K,), states (K, n), controls (K, m)
-    on the sample grid): initial parameters, then the detector run over each flight from
-    them for the parameters' spread and the Weibull fits of both statistics."""
+    on the sample grid): the initial parameters, then, from the RLS and GLRT run over each
+    flight from them, the parameters' spread and the Weibull fits of both statistics."""
     initial = fit_initial_parameters([(s, c) for _, s, c in flights], forgetting_factor)
-    provisional = {name: ChannelCalibration(
-        theta0, p0, np.zeros(theta0.size), np.ones(theta0.size), Weibull(1.0, 1.0))
-        for name, (theta0, p0) in initial.items()}
-    base = Calibration(sample_period_s, forgetting_factor, window, settle_s, provisional,
-                       Weibull(1.0, 1.0))
-    statistics, thetas = _fault_free_statistics(base, flights)
-    channels = {}
+    # The RLS and the GLRT need only theta0 and P0; spread and Weibulls are placeholders.
+    provisional = Calibration(sample_period_s, forgetting_factor, window, settle_s, {
+        name: ChannelCalibration(theta0, p0, np.zeros(theta0.size), np.ones(theta0.size),
+                                 Weibull(1.0, 1.0))
+        for name, (theta0, p0) in initial.items()}, Weibull(1.0, 1.0))
+    samples = [sample for flight in flights
+               for sample in run_detector(provisional, flight, false_alarm_probability=0.5)
+               if np.isfinite(sample.statistic).all()]
+    statistics = np.array([sample.statistic for sample in samples])
+    channels, deviation = {}, np.zeros(len(samples))
     for k, name in enumerate(CHANNELS):
-        theta = np.array(thetas[name])
-        channels[name] = ChannelCalibration(
-            initial[name][0], initial[name][1], theta.mean(axis=0), theta.std(axis=0),
-            weibull_fit(np.array(statistics)[:, k]))
-    spread = Calibration(sample_period_s, forgetting_factor, window, settle_s, channels,
-                         Weibull(1.0, 1.0))
-    deviations = [np.nanmax(sample.parameter_deviation) for sample in
-                  _detector_samples(spread, flights) if np.isfinite(sample.statistic).all()]
+        theta = np.array([sample.theta[name] for sample in samples])
+        channel = ChannelCalibration(*initial[name], theta.mean(axis=0), theta.std(axis=0),
+                                     weibull_fit(statistics[:, k]))
+        deviation = np.maximum(deviation, parameter_deviation(theta, channel))
+        channels[name] = channel
     return Calibration(sample_period_s, forgetting_factor, window, settle_s, channels,
-                       weibull_fit(np.array(deviations)))
+                       weibull_fit(deviation))
 
 
 def run_detector(calibration: Calibration, flight: tuple[np.ndarray, np.ndarray, np.ndarray],
@@ -291,19 +297,3 @@ def run_detector(calibration: Calibration, flight: tuple[np.ndarray, np.ndarray,
         if sample is not None:
             samples.append(sample)
     return samples
-
-
-def _detector_samples(calibration: Calibration, flights) -> list[DetectorSample]:
-    # P_FA does not matter here: only statistics and parameters are used
-    return [sample for flight in flights for sample in run_detector(calibration, flight, 0.5)]
-
-
-def _fault_free_statistics(calibration: Calibration, flights) -> tuple[list, dict]:
-    """GLRT statistics (settled, full window) and parameter estimates of every sample."""
-    statistics, thetas = [], {name: [] for name in CHANNELS}
-    for sample in _detector_samples(calibration, flights):
-        if np.isfinite(sample.statistic).all():
-            statistics.append(sample.statistic)
-            for name in CHANNELS:
-                thetas[name].append(sample.theta[name])
-    return statistics, thetas
