@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Calibrate detector_node from fault-free flights (Blanke & Hansen, section II-III).
 
-    python scripts/calibrate_detector.py [--flights 12] [--out FILE]
+    python scripts/calibrate_detector.py [--flights 12] [--bags BAG ...] [--out FILE]
 
 Flies the fault_free scenario (the default flight, moderate turbulence) with other
 turbulence seeds and background winds of 5-6.25 m/s towards directions 360/N degrees apart,
@@ -11,7 +11,9 @@ statistic (per channel) and of the largest parameter deviation (self_tuning.cali
 Writes the YAML that detector_node reads (default: the package's
 config/detector_calibration.yaml); the window and forgetting factor are detector_node's
 defaults (config/detector_node.yaml), for which alone the calibration holds. Held-out
-flights for the false-alarm test use seeds from 201 (tests/detector).
+flights for the false-alarm test use seeds from 201 (tests/detector). --bags calibrates from
+recordings of fault-free flights instead (recorder_node's or demo.sh's bag/ folders: their
+/state and /controls).
 """
 
 from __future__ import annotations
@@ -22,7 +24,9 @@ import time
 from pathlib import Path
 
 import yaml
+from ament_index_python.packages import get_package_share_directory
 from uav_fault_estimator.offline import fault_free_flights, fly_on_grid
+from uav_fault_estimator.recording import flight_from_recording, project_typestore
 from uav_fault_estimator.self_tuning import calibrate
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
@@ -32,23 +36,47 @@ SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz
 SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--flights", type=int, default=12)
-    parser.add_argument("--out", type=Path, default=PACKAGE / "config/detector_calibration.yaml")
-    arguments = parser.parse_args()
-    node = yaml.safe_load(NODE_CONFIG.read_text())["/**"]["ros__parameters"]
-    scenarios = fault_free_flights(arguments.flights, FIRST_SEED)
-    started = time.monotonic()
+def simulated(count: int) -> tuple[list, str]:
+    """count fault-free flights flown now, and the calibration file's header saying which."""
+    scenarios = fault_free_flights(count, FIRST_SEED)
     flights = [fly_on_grid(scenario, SAMPLE_PERIOD_S)[:3] for scenario in scenarios]
-    calibration = calibrate(flights, SAMPLE_PERIOD_S, node["forgetting_factor"],
-                            node["window"], SETTLE_S)
     header = (f"# Written by scripts/calibrate_detector.py: {len(scenarios)} fault-free flights "
               f"of '{scenarios[0].name}' ({scenarios[0].duration_s:g} s each, "
               f"{scenarios[0].wind.turbulence} turbulence),\n# seeds "
               f"{', '.join(str(s.seed) for s in scenarios)}; winds north/east [m/s] "
               + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios)
-              + ".\n# Valid for the sample period, forgetting factor and window below only.\n")
+              + ".\n")
+    return flights, header
+
+
+def recorded(bags: list[Path]) -> tuple[list, str]:
+    """The flights of recordings, and the calibration file's header naming them."""
+    typestore = project_typestore(
+        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    flights = [flight_from_recording(bag, typestore, SAMPLE_PERIOD_S) for bag in bags]
+    header = ("# Written by scripts/calibrate_detector.py from the recordings "
+              + ", ".join(str(bag) for bag in bags) + ".\n")
+    return flights, header
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--flights", type=int, default=12)
+    parser.add_argument("--bags", type=Path, nargs="+",
+                        help="recordings of fault-free flights to calibrate from, not flying")
+    parser.add_argument("--out", type=Path, default=PACKAGE / "config/detector_calibration.yaml")
+    arguments = parser.parse_args()
+    node = yaml.safe_load(NODE_CONFIG.read_text())["/**"]["ros__parameters"]
+    started = time.monotonic()
+    try:
+        flights, header = (recorded(arguments.bags) if arguments.bags
+                           else simulated(arguments.flights))
+        calibration = calibrate(flights, SAMPLE_PERIOD_S, node["forgetting_factor"],
+                                node["window"], SETTLE_S)
+    except (ValueError, FileNotFoundError) as error:
+        print(f"calibrate_detector.py: {error}", file=sys.stderr)
+        return 1
+    header += "# Valid for the sample period, forgetting factor and window below only.\n"
     arguments.out.write_text(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
     print(f"calibrated on {len(flights)} flights in {time.monotonic() - started:.1f} s: "
           f"{arguments.out}")

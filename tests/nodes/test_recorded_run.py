@@ -1,22 +1,35 @@
 """The main job's chain on a short flight: sim_node, residual_node, mhe_node and
-recorder_node as processes, then metrics.json's figures from the recording alone."""
+recorder_node as processes, then metrics.json's figures from the recording alone, and the
+detector's calibration from it (calibrate_detector.py --bags)."""
 
 from __future__ import annotations
 
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+import yaml
 from ament_index_python.packages import get_package_share_directory
 from helpers.processes import ros2_run_argv, wait_until
 from uav_fault_estimator import figures, report
-from uav_fault_estimator.recording import project_typestore, read_topics
+from uav_fault_estimator.offline import fly_on_grid
+from uav_fault_estimator.recording import (
+    flight_from_recording,
+    project_typestore,
+    read_topics,
+)
+from uav_fault_estimator.self_tuning import Calibration
 from uav_fault_msgs.msg import FaultEstimate
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.node_tools import STREAM_QOS
+from uav_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.integration
 
+CALIBRATE = Path(__file__).resolve().parents[2] / "scripts" / "calibrate_detector.py"
 DURATION_S = 60.0
 CALM = {"north_mps": 4.0, "east_mps": 3.0, "down_mps": 0.0, "turbulence": "none",
         "filter_time_constant_s": 10}
@@ -64,3 +77,15 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     assert lift["estimate_final_pct"] == pytest.approx(10.0, abs=1.0)  # 45 s after the step
     assert lift["detection_delay_s"] is not None and lift["detection_delay_s"] <= 10.0
     assert metrics["false_alarms"] == [] and metrics["solver"]["failures"] == 0
+
+    # the detector's calibration from the recording: the same flight as the core flies it
+    recorded = flight_from_recording(bag, typestore, 0.2)
+    for got, flown in zip(recorded, fly_on_grid(load_scenario(scenario), 0.2)[:3],
+                          strict=True):
+        np.testing.assert_allclose(got, flown, rtol=0, atol=1e-9)  # stamps: ns to s
+    calibration = tmp_path / "calibration.yaml"
+    result = subprocess.run([sys.executable, str(CALIBRATE), "--bags", str(bag), "--out",
+                             str(calibration)], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert str(bag) in calibration.read_text().splitlines()[0]
+    assert Calibration.from_dict(yaml.safe_load(calibration.read_text())).window == 25

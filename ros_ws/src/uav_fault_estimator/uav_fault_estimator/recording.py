@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
+from uav_sim.messages import controls_array, state_array
 
 
 def project_typestore(message_dirs: list[Path]) -> Typestore:
@@ -78,3 +80,25 @@ def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dic
 def stamp_seconds(message) -> float:
     """A decoded message's header stamp [s]."""
     return message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec
+
+
+def flight_from_recording(bag: Path, typestore: Typestore,
+                          period_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A recorded flight's /state and /controls matched by stamp, every period_s [s] of sim
+    time: times (K,) [s], states (K, 14), controls (K, 7) in uav_sim.channels order, as
+    offline.fly_on_grid gives them for a simulated one. ValueError naming the bag when a
+    stream is missing."""
+    messages = read_topics(bag, typestore, ("/state", "/controls"))
+    controls = {message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec:
+                message for message in messages["/controls"]}
+    if not messages["/state"] or not controls:
+        raise ValueError(f"{bag}: no /state or no /controls recorded")
+    times, states, inputs = [], [], []
+    for message in messages["/state"]:
+        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        time_s = stamp_ns * 1e-9
+        if stamp_ns in controls and abs(time_s - round(time_s / period_s) * period_s) < 1e-6:
+            times.append(time_s)
+            states.append(state_array(message))
+            inputs.append(controls_array(controls[stamp_ns]))
+    return np.array(times), np.array(states), np.array(inputs)
