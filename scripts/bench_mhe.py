@@ -23,36 +23,33 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import time
-from pathlib import Path
 
 import clarabel
 import numpy as np
 import osqp
 import quadprog
 import scipy.sparse as sp
-import yaml
 from uav_fault_estimator.estimator_config import (
     EstimatorConfig,
     config_from_parameters,
 )
 from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.prediction import aircraft_predictor_factory
+from uav_fault_estimator.offline import PACKAGE
+from uav_fault_estimator.prediction import residual_generator
 from uav_fault_estimator.qp_problem import WindowQP
 from uav_fault_estimator.reference_qp import clarabel_form, solve_reference
-from uav_fault_estimator.residuals import ResidualGenerator
 from uav_sim.channels import PAPER_FAULT_NAMES
+from uav_sim.paths import default_parameters
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
-NODE_CONFIG = (Path(__file__).resolve().parent.parent
-               / "ros_ws/src/uav_fault_estimator/config/mhe_node.yaml")
 UPDATE_PERIOD_S = 0.5
 EPS = 1e-6  # absolute tolerance asked of every iterative solver
 
 
 def node_config(wind_errors: bool = False) -> EstimatorConfig:
     """mhe_node's defaults; with the three wind-error nuisance columns or faults only."""
-    parameters = yaml.safe_load(NODE_CONFIG.read_text())["/**"]["ros__parameters"]
+    parameters = default_parameters(PACKAGE, "mhe_node.yaml")
     return config_from_parameters({**parameters, "estimate_wind_errors": wind_errors}, 6)
 
 
@@ -66,8 +63,7 @@ def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
         duration_s=max(scenario.duration_s, samples * UPDATE_PERIOD_S + 30.0),
     )
     simulation = Simulation(scenario)
-    generator = ResidualGenerator(aircraft_predictor_factory(), PAPER_FAULT_NAMES, 5.0, 4.0,
-                                  UPDATE_PERIOD_S, 12.0, wind_error_step_mps=1.0)
+    generator = residual_generator(default_parameters(PACKAGE, "residual_node.yaml"))
     every = round(UPDATE_PERIOD_S / simulation.period_s)
     rows = []
     sample = simulation.sample()

@@ -16,13 +16,11 @@ import argparse
 import time
 
 import numpy as np
-from uav_fault_estimator.prediction import aircraft_predictor_factory
-from uav_fault_estimator.residuals import ResidualGenerator
-from uav_sim.channels import PAPER_FAULT_NAMES
+from uav_fault_estimator.offline import PACKAGE
+from uav_fault_estimator.prediction import residual_generator
+from uav_sim.paths import default_parameters
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
-
-UPDATE_PERIOD_S = 0.5
 
 
 def main() -> None:
@@ -34,17 +32,16 @@ def main() -> None:
     samples = [simulation.sample()]
     while simulation.time_s < arguments.seconds - 0.5 * simulation.period_s:
         samples.append(simulation.step())
-    generator = ResidualGenerator(
-        aircraft_predictor_factory(), PAPER_FAULT_NAMES, secant_step_pct=5.0, tau_a_s=4.0,
-        sensitivity_period_s=UPDATE_PERIOD_S, recovery_s=12.0, wind_error_step_mps=1.0,
-    )
+    parameters = default_parameters(PACKAGE, "residual_node.yaml")
+    generator = residual_generator(parameters)
     costs_s = np.empty(len(samples))
     for index, sample in enumerate(samples):
         started = time.perf_counter()
         generator.update(sample.time_s, sample.state, sample.controls,
                          sample.wind_filtered_ned_mps)
         costs_s[index] = time.perf_counter() - started
-    per_published_s = costs_s[1:].reshape(-1, round(UPDATE_PERIOD_S / simulation.period_s))
+    per_published_s = costs_s[1:].reshape(
+        -1, round(parameters["update_period_s"] / simulation.period_s))
     per_published_s = per_published_s.sum(axis=1)
     micro = 1e6
     print(f"{len(samples)} samples at 20 Hz, S columns {len(generator.column_names)}, "

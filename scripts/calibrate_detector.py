@@ -28,9 +28,9 @@ from ament_index_python.packages import get_package_share_directory
 from uav_fault_estimator.offline import fault_free_flights, fly_on_grid
 from uav_fault_estimator.recording import flight_from_recording, project_typestore
 from uav_fault_estimator.self_tuning import calibrate
+from uav_sim.paths import default_parameters
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
-NODE_CONFIG = PACKAGE / "config/detector_node.yaml"
 FIRST_SEED = 101
 SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz
 SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
@@ -66,7 +66,7 @@ def main() -> int:
                         help="recordings of fault-free flights to calibrate from, not flying")
     parser.add_argument("--out", type=Path, default=PACKAGE / "config/detector_calibration.yaml")
     arguments = parser.parse_args()
-    node = yaml.safe_load(NODE_CONFIG.read_text())["/**"]["ros__parameters"]
+    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     started = time.monotonic()
     try:
         flights, header = (recorded(arguments.bags) if arguments.bags

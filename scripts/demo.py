@@ -36,11 +36,13 @@ from rosbags.rosbag2 import ReaderError
 from uav_fault_estimator.processes import (
     RosProcess,
     exit_status_text,
+    fast_flight_ros_args,
     reserve_domain_id,
     ros2_run_argv,
     stop_all,
 )
 from uav_fault_estimator.report import table
+from uav_sim.paths import default_parameters
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -192,9 +194,8 @@ class Demo:
                           STARTUP_TIMEOUT_S):
             raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
         started = time.monotonic()
-        sim = self.start("uav_sim", "sim_node", [
-            "-p", f"scenario:={self.scenario.path}", "-p", "real_time_factor:=0.0",
-            "-p", f"wait_for_subscribers:={STATE_SUBSCRIBERS}"])
+        sim = self.start("uav_sim", "sim_node",
+                         fast_flight_ros_args(self.scenario.path, STATE_SUBSCRIBERS))
         print(f"flying {self.scenario.duration_s:g} s of simulated time as fast as the nodes "
               "keep up", flush=True)
         if not self.watch(lambda: not sim.running(), STALL_TIMEOUT_S, finished=("sim_node",)):
@@ -229,8 +230,6 @@ def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
     (ROS parameters do not convert)."""
     if not scenario.estimator:
         return {}
-    from uav_sim.node_tools import default_parameters
-
     defaults = default_parameters("uav_fault_estimator", "mhe_node.yaml")
     overrides = {}
     for name, value in scenario.estimator.items():

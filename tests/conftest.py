@@ -9,8 +9,7 @@ from pathlib import Path
 
 import pytest
 from helpers.graph import RosGraph
-from helpers.processes import RosProcess
-from helpers.ros_domain import reserve_domain_id
+from uav_fault_estimator.processes import RosProcess, reserve_domain_id
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 

@@ -20,13 +20,11 @@ import pytest
 import yaml
 from uav_fault_estimator.offline import fault_free_flights, fly_on_grid
 from uav_fault_estimator.self_tuning import CHANNELS, Calibration, load_calibration, run_detector
-from uav_sim.paths import scenarios_dir
+from uav_sim.paths import default_parameters, scenarios_dir
 from uav_sim.scenario import load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-NODE_DEFAULTS = yaml.safe_load(
-    (REPO_ROOT / "ros_ws/src/uav_fault_estimator/config/detector_node.yaml").read_text()
-)["/**"]["ros__parameters"]
+NODE_DEFAULTS = default_parameters("uav_fault_estimator", "detector_node.yaml")
 P_FA = NODE_DEFAULTS["false_alarm_probability"]
 TESTS = (*CHANNELS, "parameters", "combined")
 ONSET_S = 150.0  # aileron_loss.yaml

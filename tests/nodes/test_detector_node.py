@@ -8,8 +8,8 @@ import subprocess
 
 import numpy as np
 import pytest
-from helpers.processes import ros2_run_argv
 from uav_fault_estimator.offline import fly_on_grid
+from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.self_tuning import (
     CHANNELS,
     SelfTuningDetector,
@@ -32,9 +32,8 @@ def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, st
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
     assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
     scenario = short_scenario(DURATION_S)
-    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
-        "-p", f"scenario:={scenario}", "-p", "real_time_factor:=0.0",
-        "-p", "wait_for_subscribers:=1"]), "sim_node")
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
+        scenario, subscribers=1)), "sim_node")
     assert sim.wait(timeout_s=90) == 0, sim.output()
     expected = round(DURATION_S / 0.2)  # every grid sample but the first (no r[k-1] yet)
     graph.spin(30.0, until=lambda: len(alarms) >= expected)

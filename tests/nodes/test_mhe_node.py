@@ -7,7 +7,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from helpers.processes import ros2_run_argv
+from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_msgs.msg import FaultEstimate
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.messages import stamp_seconds
@@ -31,9 +31,8 @@ def test_estimates_follow_the_residuals_and_find_a_lift_loss(short_scenario, gra
     assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
-    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
-        "-p", f"scenario:={scenario}", "-p", "real_time_factor:=0.0",
-        "-p", "wait_for_subscribers:=1"]), "sim_node")
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
+        scenario, subscribers=1)), "sim_node")
     assert sim.wait(timeout_s=90) == 0, sim.output()
     expected = round(DURATION_S / PERIOD_S)
     graph.spin(60.0, until=lambda: len(estimates) >= expected)

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 import yaml
 from ament_index_python.packages import get_package_share_directory
-from helpers.processes import ros2_run_argv, wait_until
 from uav_fault_estimator import figures, report
 from uav_fault_estimator.offline import fly_on_grid
+from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_estimator.recording import (
     flight_from_recording,
     project_typestore,
@@ -48,9 +48,8 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
-    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
-        "-p", f"scenario:={scenario}", "-p", "real_time_factor:=0.0",
-        "-p", "wait_for_subscribers:=2"]), "sim_node")  # residual_node and the recorder
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
+        scenario, subscribers=2)), "sim_node")  # residual_node and the recorder
     assert sim.wait(timeout_s=90) == 0, sim.output()
     expected = round(DURATION_S / 0.5)
     typestore = project_typestore(

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 from ament_index_python.packages import get_package_share_directory
-from helpers.processes import ros2_run_argv, wait_until
 from rosbags.rosbag2 import Reader
+from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_estimator.recording import project_typestore
 
 pytestmark = pytest.mark.integration
@@ -26,9 +26,8 @@ def test_every_stream_message_is_recorded_and_readable(short_scenario, start_pro
     recorder = start_process(ros2_run_argv("uav_fault_estimator", "recorder_node", ros_args=[
         "-p", f"output_dir:={bag}"]), "recorder_node")
     assert wait_until(lambda: bag.exists() or not recorder.running(), timeout_s=30)
-    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
-        "-p", f"scenario:={short_scenario(DURATION_S)}", "-p", "real_time_factor:=0.0",
-        "-p", "wait_for_subscribers:=1"]), "sim_node")
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
+        short_scenario(DURATION_S), subscribers=1)), "sim_node")
     assert sim.wait(timeout_s=60) == 0, sim.output()
     assert recorder.stop(signal.SIGINT) == 0, recorder.output()
 

@@ -7,7 +7,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from helpers.processes import ros2_run_argv
+from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.residuals import WIND_ERROR_NAMES
 from uav_fault_msgs.msg import Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
@@ -25,10 +25,8 @@ ANGULAR_Y = 4  # the residual row that needs the pitch rate
 
 def fly(start_process, scenario, name: str) -> None:
     sim = start_process(
-        ros2_run_argv("uav_sim", "sim_node", ros_args=[
-            "-p", f"scenario:={scenario}", "-p", "real_time_factor:=0.0",
-            "-p", "wait_for_subscribers:=1",
-        ]),
+        ros2_run_argv("uav_sim", "sim_node",
+                      ros_args=fast_flight_ros_args(scenario, subscribers=1)),
         name,
     )
     assert sim.wait(timeout_s=60) == 0, sim.output()

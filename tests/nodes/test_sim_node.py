@@ -5,8 +5,8 @@ from __future__ import annotations
 import subprocess
 
 import pytest
-from helpers.processes import ros2_run_argv
 from rosgraph_msgs.msg import Clock
+from uav_fault_estimator.processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
 from uav_sim.messages import stamp_seconds
 from uav_sim.node_tools import STREAM_QOS

@@ -10,8 +10,8 @@ import time
 
 import pytest
 from helpers.echo_output import echo_documents
-from helpers.processes import RosProcess
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, STAMP_NANOSEC, STAMP_SEC, topic_of
+from uav_fault_estimator.processes import RosProcess
 
 pytestmark = pytest.mark.integration
 

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rclpy.node import Node
+from uav_sim.messages import stamp_nanoseconds
 from uav_sim.node_tools import STREAM_QOS
 
 from uav_fault_estimator.stamp_matching import StampMatcher
@@ -42,7 +43,7 @@ class MatchedStreams:
         return self.matcher.dropped_sets
 
     def receive(self, topic: str, message: Any) -> None:
-        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        stamp_ns = stamp_nanoseconds(message.header.stamp)
         if self.matcher.is_backwards(stamp_ns):
             self.node.get_logger().warning(
                 f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"

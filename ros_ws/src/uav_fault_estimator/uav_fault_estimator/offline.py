@@ -8,37 +8,21 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
-from ament_index_python.packages import get_package_share_directory
 from uav_sim.channels import FAULT_NAMES
+from uav_sim.paths import default_parameters
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
 from uav_fault_estimator.estimator_config import config_from_parameters
 from uav_fault_estimator.metrics import EstimateSeries, SeededSeries
 from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.prediction import aircraft_predictor_factory
-from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, ResidualGenerator
+from uav_fault_estimator.prediction import residual_generator
+from uav_fault_estimator.residuals import RESIDUAL_CHANNELS
 
-
-def node_defaults(node: str) -> dict[str, Any]:
-    """A node's parameters as its config/<node>.yaml sets them."""
-    config_dir = Path(get_package_share_directory("uav_fault_estimator")) / "config"
-    text = (config_dir / f"{node}.yaml").read_text()
-    return dict(yaml.safe_load(text)["/**"]["ros__parameters"])
-
-
-def residual_generator(parameters: Mapping[str, Any]) -> ResidualGenerator:
-    """residual_node's generator from its parameters (config/residual_node.yaml's keys)."""
-    p = parameters
-    return ResidualGenerator(
-        aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
-        p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
-    )
+PACKAGE = "uav_fault_estimator"
 
 
 def fly_and_estimate(
@@ -56,8 +40,10 @@ def fly_and_estimate(
     turbulence) instead of the filtered estimate, which no aircraft has: a bound on what
     better wind knowledge could give.
     """
-    residual = {**node_defaults("residual_node"), **(residual_overrides or {})}
-    mhe = {**node_defaults("mhe_node"), **scenario.estimator, **(mhe_overrides or {})}
+    residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
+                **(residual_overrides or {})}
+    mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), **scenario.estimator,
+           **(mhe_overrides or {})}
     generator = residual_generator(residual)
     estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
     published = len(mhe["fault_names"])

@@ -26,6 +26,7 @@ wind the air-relative and ground velocities change alike; the filtered wind's ow
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import jsbsim
 import numpy as np
@@ -47,7 +48,7 @@ from uav_sim.channels import CONTROL_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
 
-from uav_fault_estimator.residuals import PredictorFactory
+from uav_fault_estimator.residuals import PredictorFactory, ResidualGenerator
 
 _STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
 _CONTROL = {name: index for index, name in enumerate(CONTROL_CHANNELS)}
@@ -130,3 +131,12 @@ def aircraft_predictor_factory() -> PredictorFactory:
     """Makes AircraftPredictor copies that share one set of propeller tables."""
     propeller = Propeller.from_aircraft()
     return lambda faults_pct: AircraftPredictor(faults_pct, propeller)
+
+
+def residual_generator(parameters: Mapping[str, Any]) -> ResidualGenerator:
+    """residual_node's generator from its parameters (config/residual_node.yaml's keys)."""
+    p = parameters
+    return ResidualGenerator(
+        aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
+        p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
+    )

@@ -95,6 +95,13 @@ def ros2_run_argv(
     return argv + (["--ros-args", *ros_args] if ros_args else [])
 
 
+def fast_flight_ros_args(scenario: Path | str, subscribers: int) -> list[str]:
+    """sim_node's --ros-args to fly the scenario as fast as its subscribers keep up, once
+    `state` has this many subscriptions (its fast mode: nothing is lost)."""
+    return ["-p", f"scenario:={scenario}", "-p", "real_time_factor:=0.0",
+            "-p", f"wait_for_subscribers:={subscribers}"]
+
+
 def wait_until(predicate: Callable[[], object], timeout_s: float, poll_s: float = 0.1) -> bool:
     """Poll predicate() until it is true or timeout_s passes; whether it became true."""
     deadline = time.monotonic() + timeout_s

@@ -14,7 +14,7 @@ import numpy as np
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
-from uav_sim.messages import controls_array, state_array
+from uav_sim.messages import controls_array, stamp_nanoseconds, state_array
 
 
 def project_typestore(message_dirs: list[Path]) -> Typestore:
@@ -89,13 +89,13 @@ def flight_from_recording(bag: Path, typestore: Typestore,
     offline.fly_on_grid gives them for a simulated one. ValueError naming the bag when a
     stream is missing."""
     messages = read_topics(bag, typestore, ("/state", "/controls"))
-    controls = {message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec:
-                message for message in messages["/controls"]}
+    controls = {stamp_nanoseconds(message.header.stamp): message
+                for message in messages["/controls"]}
     if not messages["/state"] or not controls:
         raise ValueError(f"{bag}: no /state or no /controls recorded")
     times, states, inputs = [], [], []
     for message in messages["/state"]:
-        stamp_ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
+        stamp_ns = stamp_nanoseconds(message.header.stamp)
         time_s = stamp_ns * 1e-9
         if stamp_ns in controls and abs(time_s - round(time_s / period_s) * period_s) < 1e-6:
             times.append(time_s)

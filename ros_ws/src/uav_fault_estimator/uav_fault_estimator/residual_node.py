@@ -23,8 +23,8 @@ from uav_sim.node_tools import (
 )
 
 from uav_fault_estimator.matched_streams import MatchedStreams
-from uav_fault_estimator.prediction import aircraft_predictor_factory
-from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, ResidualGenerator, ResidualSample
+from uav_fault_estimator.prediction import residual_generator
+from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, ResidualSample
 
 PARAMETERS = {
     "fault_names": "faults whose sensitivities are computed: the columns of S",
@@ -53,10 +53,7 @@ class ResidualNode(Node):
         p = self.parameters
         if not p["update_period_s"] > 0:
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
-        self.generator = ResidualGenerator(
-            aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
-            p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
-        )
+        self.generator = residual_generator(p)
         self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset")
         self.diagnostics = Diagnostics(self)

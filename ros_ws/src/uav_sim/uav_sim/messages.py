@@ -38,6 +38,11 @@ def stamp_seconds(time: Time) -> float:
     return time.sec + time.nanosec / NANOSECONDS_PER_SECOND
 
 
+def stamp_nanoseconds(time: Time) -> int:
+    """Nanoseconds from a ROS time: exact, for matching stamps."""
+    return time.sec * NANOSECONDS_PER_SECOND + time.nanosec
+
+
 def header(time_s: float, frame_id: str = "") -> Header:
     return Header(stamp=stamp(time_s), frame_id=frame_id)
 

@@ -5,18 +5,17 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any, TypeVar
 
 import rclpy
-import yaml
-from ament_index_python.packages import get_package_share_directory
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from uav_sim.paths import default_parameters
 
 # Sensor-rate streams and estimates: reliable and keep-all, so that a fast simulation loses
 # nothing while subscribers catch up.
@@ -30,13 +29,6 @@ CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSTICS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
-
-
-def default_parameters(package: str, config_file: str) -> dict[str, Any]:
-    """The `/**: ros__parameters` mapping of share/<package>/config/<config_file>."""
-    path = Path(get_package_share_directory(package)) / "config" / config_file
-    with open(path) as stream:
-        return yaml.safe_load(stream)["/**"]["ros__parameters"]
 
 
 def declare_parameters(

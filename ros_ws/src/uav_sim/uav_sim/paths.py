@@ -1,6 +1,10 @@
-"""Where the package's data lives: the installed share directory, or the source tree."""
+"""Where the package's data lives: the installed share directory, or the source tree;
+and the nodes' parameter defaults (no rclpy here)."""
 
 from pathlib import Path
+from typing import Any
+
+import yaml
 
 PACKAGE = "uav_sim"
 _SOURCE_ROOT = Path(__file__).resolve().parent.parent
@@ -33,3 +37,13 @@ def jsbsim_root() -> Path:
 def scenarios_dir() -> Path:
     """Folder of the shipped scenario files."""
     return share_dir() / "scenarios"
+
+
+def default_parameters(package: str, config_file: str) -> dict[str, Any]:
+    """The `/**: ros__parameters` mapping of share/<package>/config/<config_file> (the
+    installed package's: run scripts/setup.sh after editing a config)."""
+    from ament_index_python.packages import get_package_share_directory
+
+    path = Path(get_package_share_directory(package)) / "config" / config_file
+    with open(path) as stream:
+        return yaml.safe_load(stream)["/**"]["ros__parameters"]
