@@ -1,4 +1,5 @@
-"""The run's figures (PNG) from a recording: states, north-east track, filtered wind,
+"""The run's figures (PNG) from a recording: states, north-east track, the wind (true, the
+paper's filtered estimate and, with air data, the wind triangle),
 residuals, one sensitivity column, each fault's estimate over its seeded value, and when
 detector_node ran, its statistics against their thresholds; its combined alarms are marked
 on the estimates too. matplotlib without a display (Agg); no ROS here."""
@@ -13,7 +14,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from uav_sim.frames import north_east_m
+from uav_sim.frames import north_east_m, wind_triangle_ned_mps
+from uav_sim.messages import air_data_array, stamp_nanoseconds, state_array
 
 from uav_fault_estimator.recording import stamp_seconds
 
@@ -28,8 +30,9 @@ def _save(figure: plt.Figure, path: Path) -> Path:
     return path
 
 
-TOPICS = ("/state", "/wind/filtered", "/residuals", "/faults/estimate", "/faults/seeded",
-          "/faults/alarm")
+TOPICS = ("/state", "/air_data", "/wind/true", "/wind/filtered", "/residuals",
+          "/faults/estimate", "/faults/seeded", "/faults/alarm")
+WIND_AXES = ("north", "east", "down")
 ALARM_COLOR = "tab:red"
 
 
@@ -67,16 +70,8 @@ def plot_run(data: dict[str, list], out: Path) -> list[Path]:
         axis.set_aspect("equal")
         axis.set_title("ground track from the start")
         written.append(_save(figure, out / "track.png"))
-    wind = data["/wind/filtered"]
-    if wind:
-        figure, axis = plt.subplots(figsize=(9, 3.5))
-        for component in ("north", "east", "down"):
-            axis.plot(_stamps(wind), [getattr(m, f"{component}_mps") for m in wind],
-                      label=component)
-        axis.set_ylabel("filtered wind [m/s]")
-        axis.set_xlabel("simulation time [s]")
-        axis.legend()
-        written.append(_save(figure, out / "wind.png"))
+    if data["/wind/filtered"]:
+        written.append(_wind_figure(data, out / "wind.png"))
     residuals = data["/residuals"]
     if residuals:
         t_res = _stamps(residuals)
@@ -117,6 +112,44 @@ def plot_run(data: dict[str, list], out: Path) -> list[Path]:
         written.append(_alarms_figure(data["/faults/alarm"], data["/faults/seeded"],
                                       out / "alarms.png"))
     return written
+
+
+def _wind_triangle(state: list, air_data: list) -> tuple[np.ndarray, np.ndarray]:
+    """Stamps [s] and NED winds [m/s] from the wind triangle of the state and air-data
+    messages of equal stamps."""
+    states = {stamp_nanoseconds(m.header.stamp): state_array(m) for m in state}
+    stamps, winds = [], []
+    for message in air_data:
+        stamp_ns = stamp_nanoseconds(message.header.stamp)
+        if stamp_ns in states:
+            values = states[stamp_ns]
+            stamps.append(stamp_ns * 1e-9)
+            winds.append(wind_triangle_ned_mps(values[6:9], *values[3:6],
+                                               air_data_array(message)))
+    return np.array(stamps), np.array(winds).reshape(-1, 3)
+
+
+def _wind_figure(data: dict[str, list], path: Path) -> Path:
+    """Each wind component: the true wind, the wind triangle from air data (when recorded)
+    and the paper's filtered estimate."""
+    figure, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    true_wind = data.get("/wind/true") or []
+    triangle_t, triangle = _wind_triangle(data["/state"], data.get("/air_data") or [])
+    filtered = data["/wind/filtered"]
+    for k, (component, axis) in enumerate(zip(WIND_AXES, axes, strict=True)):
+        if true_wind:
+            axis.plot(_stamps(true_wind), [(m.vector.x, m.vector.y, m.vector.z)[k]
+                                           for m in true_wind],
+                      color="0.6", linewidth=0.8, label="true")
+        if triangle.size:
+            axis.plot(triangle_t, triangle[:, k], linewidth=0.6, alpha=0.8,
+                      label="wind triangle (air data)")
+        axis.plot(_stamps(filtered), [getattr(m, f"{component}_mps") for m in filtered],
+                  linewidth=1.5, label=f"filtered, tau {filtered[0].filter_time_constant_s:g} s")
+        axis.set_ylabel(f"wind {component} [m/s]")
+    axes[0].legend(fontsize=8, loc="upper right")
+    axes[-1].set_xlabel("simulation time [s]")
+    return _save(figure, path)
 
 
 def _mark_alarms(axis: plt.Axes, alarms: list, label: str = "combined alarm") -> None:

@@ -38,6 +38,13 @@ STATE_UNITS: tuple[str, ...] = (
     "rpm",
 )
 
+# Air data (pitot-static airspeed, alpha and sideslip vanes): message AirData, whose fields
+# are AIR_DATA_FIELDS (the airspeed field says that it is the true airspeed).
+AIR_DATA_CHANNELS: tuple[str, ...] = ("airspeed", "angle_of_attack", "sideslip")
+AIR_DATA_FIELDS: tuple[str, ...] = ("true_airspeed_mps", "angle_of_attack_rad", "sideslip_rad")
+# Channels a scenario's sensor_dropouts may name.
+DROPOUT_CHANNELS: tuple[str, ...] = STATE_CHANNELS + AIR_DATA_CHANNELS
+
 CONTROL_CHANNELS: tuple[str, ...] = (
     "flap",
     "elevator",

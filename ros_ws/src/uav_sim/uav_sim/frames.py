@@ -20,6 +20,22 @@ def ned_to_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray
     )
 
 
+def air_velocity_body_mps(airspeed_mps, angle_of_attack_rad, sideslip_rad) -> np.ndarray:
+    """Air-relative velocity in body axes [m/s] from airspeed, alpha and beta:
+    V (cos a cos b, sin b, sin a cos b)."""
+    cos_beta = np.cos(sideslip_rad)
+    return airspeed_mps * np.array([np.cos(angle_of_attack_rad) * cos_beta, np.sin(sideslip_rad),
+                                    np.sin(angle_of_attack_rad) * cos_beta])
+
+
+def wind_triangle_ned_mps(velocity_ned_mps: np.ndarray, roll_rad: float, pitch_rad: float,
+                          yaw_rad: float, air_data: np.ndarray) -> np.ndarray:
+    """The wind [m/s, NED, towards] from the wind triangle: ground velocity less the air
+    velocity, air_data = (true airspeed [m/s], angle of attack, sideslip [rad])."""
+    body_to_ned = ned_to_body(roll_rad, pitch_rad, yaw_rad).T
+    return velocity_ned_mps - body_to_ned @ air_velocity_body_mps(*air_data)
+
+
 EARTH_RADIUS_M = 6378137.0  # WGS-84 equatorial; the flat-earth map spans a few km
 
 

@@ -10,10 +10,12 @@ from collections.abc import Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Vector3, Vector3Stamped
 from std_msgs.msg import Header
-from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 
 from uav_sim.channels import (
+    AIR_DATA_FIELDS,
     CONTROL_CHANNELS,
     CONTROL_UNITS,
     STATE_CHANNELS,
@@ -22,6 +24,7 @@ from uav_sim.channels import (
 )
 
 NED_FRAME = "ned"
+BODY_FRAME = "body"
 STATE_FIELDS = tuple(map(field_name, STATE_CHANNELS, STATE_UNITS))
 CONTROL_FIELDS = tuple(map(field_name, CONTROL_CHANNELS, CONTROL_UNITS))
 NANOSECONDS_PER_SECOND = 1_000_000_000
@@ -73,6 +76,19 @@ def controls_array(message: ControlInputs) -> np.ndarray:
     return np.array([float(getattr(message, field)) for field in CONTROL_FIELDS])
 
 
+def air_data_message(time_s: float, air_data: Sequence[float]) -> AirData:
+    """AirData from a (3,) array in AIR_DATA_CHANNELS order (NaN: channel missing)."""
+    message = AirData(header=header(time_s, BODY_FRAME))
+    for field, value in zip(AIR_DATA_FIELDS, air_data, strict=True):
+        setattr(message, field, float(value))
+    return message
+
+
+def air_data_array(message: AirData) -> np.ndarray:
+    """(3,) array in AIR_DATA_CHANNELS order from an AirData message."""
+    return np.array([getattr(message, field) for field in AIR_DATA_FIELDS], dtype=float)
+
+
 def wind_message(time_s: float, wind_ned_mps: Sequence[float], tau_s: float) -> WindEstimate:
     north, east, down = (float(value) for value in wind_ned_mps)
     return WindEstimate(
@@ -82,6 +98,13 @@ def wind_message(time_s: float, wind_ned_mps: Sequence[float], tau_s: float) -> 
         down_mps=down,
         filter_time_constant_s=float(tau_s),
     )
+
+
+def true_wind_message(time_s: float, wind_ned_mps: Sequence[float]) -> Vector3Stamped:
+    """The simulation's true wind (background plus turbulence), NED [m/s, towards]."""
+    north, east, down = (float(value) for value in wind_ned_mps)
+    return Vector3Stamped(header=header(time_s, NED_FRAME),
+                          vector=Vector3(x=north, y=east, z=down))
 
 
 def wind_array(message: WindEstimate) -> np.ndarray:

@@ -1,7 +1,8 @@
 """Scenario files (DESIGN.md schema): load, check every key, and fail with one clear message.
 
 A scenario names the flight (start, waypoints, duration), the wind and turbulence, the
-faults seeded into the aircraft and the sensor dropouts of the state stream. Loading is
+sensors on board, the faults seeded into the aircraft and the sensor dropouts of the state
+and air-data streams. Loading is
 strict: an unknown or missing key, a wrong type or an impossible value stops with a
 ScenarioError naming the file and the key, before anything starts.
 """
@@ -15,10 +16,12 @@ from typing import Any
 
 import yaml
 
-from uav_sim.channels import FAULT_NAMES, STATE_CHANNELS
+from uav_sim.channels import AIR_DATA_CHANNELS, DROPOUT_CHANNELS, FAULT_NAMES
 from uav_sim.paths import scenarios_dir
 
-TURBULENCE_LEVELS = ("none", "light", "moderate", "severe")
+# from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
+# the others: JSBSim's MIL-HDBK-1797 presets (uav_sim.wind).
+TURBULENCE_LEVELS = ("from_wind", "none", "light", "moderate", "severe")
 DEFAULT_SCENARIO = "default.yaml"
 
 
@@ -45,6 +48,15 @@ class Wind:
 
 
 @dataclass(frozen=True)
+class SensorSuite:
+    """What the aircraft carries: air data (pitot airspeed, alpha/beta vanes) or not, and
+    datasheet-typical sensor noise (uav_sim.sensors) or ideal sensors."""
+
+    air_data: bool = True
+    noise: bool = True
+
+
+@dataclass(frozen=True)
 class SeededFault:
     """A fault ramping linearly from 0 at start_s to magnitude_pct at start_s + ramp_s."""
 
@@ -63,7 +75,7 @@ class SeededFault:
 
 @dataclass(frozen=True)
 class SensorDropout:
-    """A state channel missing from the state stream for start_s <= t < end_s."""
+    """A state or air-data channel missing (NaN) for start_s <= t < end_s."""
 
     channel: str
     start_s: float
@@ -81,6 +93,7 @@ class Scenario:
     initial: InitialCondition
     waypoints_ne_m: tuple[tuple[float, float], ...]
     wind: Wind
+    sensors: SensorSuite = SensorSuite()
     faults: tuple[SeededFault, ...] = ()
     sensor_dropouts: tuple[SensorDropout, ...] = ()
     estimator: dict[str, Any] = field(default_factory=dict)
@@ -141,6 +154,12 @@ class _Reader:
             self.fail(f"'{self.key(name)}' must be at least {minimum:g}, got {value!r}")
         return float(value)
 
+    def flag(self, name: str, default: bool) -> bool:
+        value = self.data.get(name, default)
+        if not isinstance(value, bool):
+            self.fail(f"'{self.key(name)}' must be true or false, got {value!r}")
+        return value
+
     def choice(self, name: str, choices: tuple[str, ...]) -> str:
         value = self.data[name]
         if value not in choices:
@@ -182,6 +201,11 @@ def _wind(reader: _Reader) -> Wind:
     )
 
 
+def _sensors(reader: _Reader) -> SensorSuite:
+    reader.check_keys(set(), {"air_data", "noise"})
+    return SensorSuite(air_data=reader.flag("air_data", True), noise=reader.flag("noise", True))
+
+
 def _waypoints(reader: _Reader) -> tuple[tuple[float, float], ...]:
     points = reader.items("waypoints_ne_m")
     if len(points) < 2:
@@ -205,7 +229,7 @@ def _fault(reader: _Reader) -> SeededFault:
 def _dropout(reader: _Reader) -> SensorDropout:
     reader.check_keys({"channel", "start_s", "end_s"})
     dropout = SensorDropout(
-        channel=reader.choice("channel", STATE_CHANNELS),
+        channel=reader.choice("channel", DROPOUT_CHANNELS),
         start_s=reader.number("start_s", minimum=0.0),
         end_s=reader.number("end_s", minimum=0.0),
     )
@@ -226,7 +250,7 @@ def load_scenario(path: str | Path) -> Scenario:
     reader = _Reader(path, data, "")
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
-        {"faults", "sensor_dropouts", "estimator"},
+        {"sensors", "faults", "sensor_dropouts", "estimator"},
     )
     if not isinstance(data["name"], str) or not data["name"]:
         reader.fail(f"'name' must be a non-empty string, got {data['name']!r}")
@@ -236,6 +260,15 @@ def load_scenario(path: str | Path) -> Scenario:
     estimator = data.get("estimator") or {}
     if not isinstance(estimator, dict):
         reader.fail("'estimator' must be a mapping of estimator parameters")
+    sensors = _sensors(reader.child("sensors")) if "sensors" in data else SensorSuite()
+    dropouts = tuple(
+        _dropout(_Reader(path, item, f"sensor_dropouts[{index}]"))
+        for index, item in enumerate(reader.items("sensor_dropouts"))
+    )
+    for index, dropout in enumerate(dropouts):
+        if dropout.channel in AIR_DATA_CHANNELS and not sensors.air_data:
+            reader.fail(f"'sensor_dropouts[{index}].channel' is {dropout.channel!r}, an air-data "
+                        "channel, but sensors.air_data is false")
     return Scenario(
         name=data["name"],
         duration_s=reader.number("duration_s", positive=True),
@@ -243,14 +276,12 @@ def load_scenario(path: str | Path) -> Scenario:
         initial=_initial(reader.child("initial")),
         waypoints_ne_m=_waypoints(reader),
         wind=_wind(reader.child("wind")),
+        sensors=sensors,
         faults=tuple(
             _fault(_Reader(path, item, f"faults[{index}]"))
             for index, item in enumerate(reader.items("faults"))
         ),
-        sensor_dropouts=tuple(
-            _dropout(_Reader(path, item, f"sensor_dropouts[{index}]"))
-            for index, item in enumerate(reader.items("sensor_dropouts"))
-        ),
+        sensor_dropouts=dropouts,
         estimator=dict(estimator),
         path=path,
     )

@@ -1,8 +1,11 @@
 """sim_node: flies a scenario in the core Simulation and publishes it at the sensor rate.
 
 Publishes (relative names, STREAM_QOS): `state` (AircraftState), `controls`
-(ControlInputs), `wind/filtered` (WindEstimate), `faults/seeded` (FaultVector); and `/clock`
-(the simulation time, for nodes with use_sim_time) and `/diagnostics`. Ends by itself at
+(ControlInputs), `air_data` (AirData; only when the scenario's aircraft carries air data),
+`wind/filtered` (WindEstimate); the simulation's truth `faults/seeded` (FaultVector) and
+`wind/true` (geometry_msgs/Vector3Stamped, NED m/s); and `/clock` (the simulation time, for
+nodes with use_sim_time) and `/diagnostics`. Measurements go through the sensor
+model (uav_sim.sensors) unless the scenario says `sensors: {noise: false}`. Ends by itself at
 the scenario's end, with exit status 0; a bad scenario ends it before it starts, status 1.
 """
 
@@ -13,16 +16,19 @@ import sys
 import time
 
 import rclpy
+from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 
-from uav_sim.channels import FAULT_NAMES, STATE_CHANNELS
+from uav_sim.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.messages import (
+    air_data_message,
     controls_message,
     fault_vector_message,
     stamp,
     state_message,
+    true_wind_message,
     wind_message,
 )
 from uav_sim.node_tools import (
@@ -68,7 +74,12 @@ class SimNode(Node):
             self.create_publisher(ControlInputs, "controls", STREAM_QOS),
             self.create_publisher(WindEstimate, "wind/filtered", STREAM_QOS),
             self.create_publisher(FaultVector, "faults/seeded", STREAM_QOS),
+            self.create_publisher(Vector3Stamped, "wind/true", STREAM_QOS),
         ]
+        self.air_data_publisher = None
+        if self.scenario.sensors.air_data:
+            self.air_data_publisher = self.create_publisher(AirData, "air_data", STREAM_QOS)
+            self.stream_publishers.append(self.air_data_publisher)
         self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
         self.diagnostics = Diagnostics(self)
         self.get_logger().info(
@@ -87,7 +98,10 @@ class SimNode(Node):
                 time_s, sample.wind_filtered_ned_mps, self.scenario.wind.filter_time_constant_s
             ),
             fault_vector_message(time_s, FAULT_NAMES, sample.seeded_faults_pct),
+            true_wind_message(time_s, sample.wind_ned_mps),
         ]
+        if self.air_data_publisher is not None:
+            messages.append(air_data_message(time_s, sample.air_data))
         for publisher, message in zip(self.stream_publishers, messages, strict=True):
             publisher.publish(message)
         self.clock_publisher.publish(Clock(clock=stamp(time_s)))
@@ -147,11 +161,10 @@ class SimNode(Node):
         )
 
     def report(self, sample: Sample, wall_s: float) -> None:
-        missing = [
-            name
-            for name, value in zip(STATE_CHANNELS, sample.state, strict=True)
-            if not math.isfinite(value)
-        ]
+        channels = list(zip(STATE_CHANNELS, sample.state, strict=True))
+        if sample.air_data is not None:
+            channels += zip(AIR_DATA_CHANNELS, sample.air_data, strict=True)
+        missing = [name for name, value in channels if not math.isfinite(value)]
         values = {
             "sim_time_s": f"{sample.time_s:.2f}",
             "real_time_factor": f"{sample.time_s / wall_s:.1f}" if wall_s > 0 else "-",

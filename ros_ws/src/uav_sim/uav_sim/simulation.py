@@ -1,8 +1,9 @@
 """The simulated flight: JSBSim Aerosonde, autopilot, guidance, wind and seeded faults.
 
 `Simulation(scenario)` trims the aircraft at the scenario's start, then `step()` advances
-one sensor period and returns a `Sample`: the state, controls, filtered wind and seeded
-faults as arrays in the channel orders of uav_sim.channels. No ROS here.
+one sensor period and returns a `Sample`: the measured state, controls and air data (through
+the sensor model), the filtered wind, the seeded faults and the true values, as arrays in the
+channel orders of uav_sim.channels. No ROS here.
 """
 
 from __future__ import annotations
@@ -22,20 +23,27 @@ from uav_sim.aircraft import (
     set_faults,
 )
 from uav_sim.autopilot import Autopilot, FlightState
-from uav_sim.channels import FAULT_NAMES, STATE_CHANNELS
+from uav_sim.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.frames import north_east_m
 from uav_sim.guidance import WaypointGuidance
 from uav_sim.propeller import Propeller
 from uav_sim.scenario import Scenario
+from uav_sim.sensors import SensorModel
 from uav_sim.trim import Trim, start_trimmed, trim_level_flight
 from uav_sim.wind import (
+    FROM_WIND,
     FilteredWind,
     background_wind_ned_mps,
+    set_gusts,
     start_wind,
     total_wind_ned_mps,
+    von_karman_turbulence,
 )
 
-CONTROL_STEPS = 4  # autopilot at 120 Hz: every 4th JSBSim step
+CONTROL_STEPS = 4  # autopilot and the from_wind gusts at 120 Hz: every 4th JSBSim step
+# Random streams of the scenario seed: one per purpose, so that one's draws never shift
+# another's (flying without air data leaves the turbulence and state noise as they were).
+TURBULENCE_STREAM, STATE_SENSOR_STREAM, AIR_DATA_SENSOR_STREAM = 1, 2, 3
 ENGINE_SPIN_UP_S = 3.0
 STATE_INTEGRATORS = tuple(
     f"simulation/integrator/{kind}/{motion}"
@@ -62,16 +70,20 @@ def spin_up_engine(fdm: jsbsim.FGFDMExec, duration_s: float = ENGINE_SPIN_UP_S) 
 
 @dataclass(frozen=True)
 class Sample:
-    """One sensor sample. Arrays follow STATE_CHANNELS, CONTROL_CHANNELS and FAULT_NAMES."""
+    """One sensor sample. Arrays follow STATE_CHANNELS, CONTROL_CHANNELS, AIR_DATA_CHANNELS
+    and FAULT_NAMES; measured values are NaN where a sensor dropout is active."""
 
     time_s: float
-    state: np.ndarray  # NaN where a sensor dropout is active
-    controls: np.ndarray
-    wind_filtered_ned_mps: np.ndarray
+    state: np.ndarray  # measured
+    controls: np.ndarray  # measured surface positions, commanded throttle and engine
+    air_data: np.ndarray | None  # measured; None without air data on board
+    wind_filtered_ned_mps: np.ndarray  # the paper's w_hat, from the true wind
     seeded_faults_pct: np.ndarray
+    true_state: np.ndarray
+    true_controls: np.ndarray
+    true_air_data: np.ndarray  # JSBSim's airspeed [m/s], alpha and beta [rad]
     wind_ned_mps: np.ndarray  # the true wind, background plus turbulence
-    airspeed_mps: float
-    position_ne_m: np.ndarray  # north, east of the start [m]
+    position_ne_m: np.ndarray  # true north, east of the start [m]
 
 
 class Simulation:
@@ -98,6 +110,16 @@ class Simulation:
         )
         self.guidance = WaypointGuidance(scenario.waypoints_ne_m)
         self.filtered_wind = FilteredWind(scenario.wind.filter_time_constant_s, self.period_s)
+        self.sensors = SensorModel(
+            scenario.sensors.noise, self.period_s, self.origin_rad[0],
+            np.random.default_rng([scenario.seed, STATE_SENSOR_STREAM]),
+            np.random.default_rng([scenario.seed, AIR_DATA_SENSOR_STREAM]))
+        self.turbulence = None
+        if scenario.wind.turbulence == FROM_WIND:
+            self.turbulence = von_karman_turbulence(
+                self.fdm, scenario.wind, scenario.initial.airspeed_mps,
+                scenario.initial.altitude_m, CONTROL_STEPS * JSBSIM_DT_S,
+                np.random.default_rng([scenario.seed, TURBULENCE_STREAM]))
         self._latest = self._sample()
 
     def _start(self) -> Trim:
@@ -142,6 +164,8 @@ class Simulation:
             if step % CONTROL_STEPS == 0:
                 time_s = self.time_s + step * JSBSIM_DT_S
                 set_faults(fdm, self.scenario.faults_pct(time_s))
+                if self.turbulence is not None:
+                    set_gusts(fdm, *self.turbulence.step())
                 self._control(CONTROL_STEPS * JSBSIM_DT_S)
             fdm.run()
         self.sample_count += 1
@@ -182,7 +206,7 @@ class Simulation:
 
     def _sample(self) -> Sample:
         fdm = self.fdm
-        state = np.array(
+        true_state = np.array(
             [
                 fdm["position/lat-geod-rad"],
                 fdm["position/long-gc-rad"],
@@ -200,9 +224,7 @@ class Simulation:
                 fdm["propulsion/engine/engine-rpm"],
             ]
         )
-        for channel in self.scenario.dropped_channels(self.time_s):
-            state[STATE_CHANNELS.index(channel)] = math.nan
-        controls = np.array(
+        true_controls = np.array(
             [
                 fdm["fcs/flap-pos-rad"],
                 fdm["fcs/elevator-pos-rad"],
@@ -213,15 +235,30 @@ class Simulation:
                 fdm["fcs/ignition-cmd"],
             ]
         )
+        true_air_data = np.array(
+            [fdm["velocities/vt-fps"] * M_PER_FT, fdm["aero/alpha-rad"], fdm["aero/beta-rad"]])
+        state, controls, air_data = self.sensors.measure(true_state, true_controls,
+                                                         true_air_data)
+        dropped = self.scenario.dropped_channels(self.time_s)
+        if dropped:
+            state, air_data = state.copy(), air_data.copy()
+            for channel in dropped:
+                if channel in AIR_DATA_CHANNELS:
+                    air_data[AIR_DATA_CHANNELS.index(channel)] = math.nan
+                else:
+                    state[STATE_CHANNELS.index(channel)] = math.nan
         faults = self.scenario.faults_pct(self.time_s)
         wind_ned_mps = total_wind_ned_mps(fdm)
         return Sample(
             time_s=self.time_s,
             state=state,
             controls=controls,
+            air_data=air_data if self.scenario.sensors.air_data else None,
             wind_filtered_ned_mps=self.filtered_wind.update(wind_ned_mps),
             seeded_faults_pct=np.array([faults[name] for name in FAULT_NAMES]),
+            true_state=true_state,
+            true_controls=true_controls,
+            true_air_data=true_air_data,
             wind_ned_mps=wind_ned_mps,
-            airspeed_mps=fdm["velocities/vt-fps"] * M_PER_FT,
             position_ne_m=self._position_ne_m(),
         )

@@ -1,15 +1,14 @@
 """Wind and turbulence of a scenario on JSBSim, and the filtered wind estimate.
 
-Turbulence is JSBSim's Tustin model (`atmosphere/turb-type` 4): the MIL-F-8785C /
-MIL-HDBK-1797 Dryden spectra in bilinear (Tustin) discrete form. JSBSim 1.3.3 has no von
-Karman model (the paper used von Karman shaping filters); Dryden is the standard rational
-approximation of the same spectra, and Tustin is JSBSim's better discretisation of it.
-Intensity follows MIL-HDBK-1797 from the wind speed at 20 ft and a probability-of-exceedance
-severity; the presets are those of JSBSim's documentation.
-"""
+Turbulence `from_wind` (the paper's) is the project's own von Karman model,
+uav_sim.turbulence, driving JSBSim's gust properties. The named levels are JSBSim's Tustin
+model (`atmosphere/turb-type` 4): the MIL-F-8785C / MIL-HDBK-1797 Dryden spectra in bilinear
+(Tustin) discrete form, with intensity from the wind speed at 20 ft and a
+probability-of-exceedance severity; the presets are those of JSBSim's documentation."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import jsbsim
@@ -18,8 +17,13 @@ import numpy as np
 from uav_sim.aircraft import M_PER_FT
 from uav_sim.filters import LowPass
 from uav_sim.scenario import Wind
+from uav_sim.turbulence import VonKarmanTurbulence, milspec_scales
 
 TUSTIN = 4
+FROM_WIND = "from_wind"
+GUST_VELOCITY_FPS = tuple(f"atmosphere/gust-{axis}-fps" for axis in ("north", "east", "down"))
+GUST_RATE_RADPS = tuple(f"atmosphere/gust-{axis}-rad_sec" for axis in "pqr")  # aerosonde.xml
+WINGSPAN_FT = "metrics/bw-ft"
 
 
 @dataclass(frozen=True)
@@ -44,6 +48,7 @@ def start_wind(fdm: jsbsim.FGFDMExec, wind: Wind, seed: int) -> None:
     """Background wind (all three axes) and turbulence from the seed, after run_ic.
 
     Turbulence starts only now: JSBSim's run_ic with Tustin turbulence on spreads NaN.
+    `from_wind` leaves JSBSim's turbulence off: von_karman_turbulence drives the gusts.
     """
     fdm["atmosphere/wind-north-fps"] = wind.north_mps / M_PER_FT
     fdm["atmosphere/wind-east-fps"] = wind.east_mps / M_PER_FT
@@ -58,6 +63,27 @@ def start_wind(fdm: jsbsim.FGFDMExec, wind: Wind, seed: int) -> None:
         preset.windspeed_at_20ft_mps / M_PER_FT
     )
     fdm["atmosphere/turbulence/milspec/severity"] = preset.severity
+
+
+def von_karman_turbulence(fdm: jsbsim.FGFDMExec, wind: Wind, airspeed_mps: float,
+                          altitude_m: float, period_s: float,
+                          rng: np.random.Generator) -> VonKarmanTurbulence:
+    """The paper's turbulence for this wind: MIL-F-8785C intensities with the horizontal
+    background wind speed as the wind at 20 ft, axes along the background wind (north when
+    there is none), at the airspeed and altitude the aircraft holds."""
+    return VonKarmanTurbulence(
+        milspec_scales(math.hypot(wind.north_mps, wind.east_mps), altitude_m),
+        airspeed_mps, fdm[WINGSPAN_FT] * M_PER_FT, math.atan2(wind.east_mps, wind.north_mps),
+        period_s, rng)
+
+
+def set_gusts(fdm: jsbsim.FGFDMExec, velocity_ned_mps: np.ndarray,
+              body_rates_radps: np.ndarray) -> None:
+    """Gust velocities (NED) and body-axis gust rates for the following JSBSim steps."""
+    for name, value in zip(GUST_VELOCITY_FPS, velocity_ned_mps / M_PER_FT, strict=True):
+        fdm[name] = float(value)
+    for name, value in zip(GUST_RATE_RADPS, body_rates_radps, strict=True):
+        fdm[name] = float(value)
 
 
 def total_wind_ned_mps(fdm: jsbsim.FGFDMExec) -> np.ndarray:
