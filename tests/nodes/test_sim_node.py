@@ -1,13 +1,15 @@
-"""sim_node as a process: every stream at the sensor rate in sim time, /clock, its own end."""
+"""sim_node as a process: every stream at the sensor rate in sim time, /clock, its own end;
+no air_data when the aircraft carries none."""
 
 from __future__ import annotations
 
 import subprocess
 
 import pytest
+from geometry_msgs.msg import Vector3Stamped
 from rosgraph_msgs.msg import Clock
 from uav_fault_estimator.processes import ros2_run_argv
-from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultVector, WindEstimate
+from uav_fault_msgs.msg import AirData, AircraftState, ControlInputs, FaultVector, WindEstimate
 from uav_sim.messages import stamp_seconds
 from uav_sim.node_tools import STREAM_QOS
 
@@ -20,7 +22,15 @@ STREAMS = {
     "/controls": ControlInputs,
     "/wind/filtered": WindEstimate,
     "/faults/seeded": FaultVector,
+    "/wind/true": Vector3Stamped,
+    "/air_data": AirData,
 }
+
+
+def sim_argv(scenario, real_time_factor: float) -> list[str]:
+    return ros2_run_argv("uav_sim", "sim_node", ros_args=[
+        "-p", f"scenario:={scenario}", "-p", f"sensor_rate_hz:={RATE_HZ}",
+        "-p", f"real_time_factor:={real_time_factor}", "-p", "wait_for_subscribers:=1"])
 
 
 @pytest.mark.timeout(120)
@@ -31,23 +41,7 @@ def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
     received = graph.subscribe(STREAMS, STREAM_QOS)
     clock = graph.subscribe({"/clock": Clock})["/clock"]
     scenario = short_scenario(DURATION_S)
-    sim = start_process(
-        ros2_run_argv(
-            "uav_sim",
-            "sim_node",
-            ros_args=[
-                "-p",
-                f"scenario:={scenario}",
-                "-p",
-                f"sensor_rate_hz:={RATE_HZ}",
-                "-p",
-                f"real_time_factor:={real_time_factor}",
-                "-p",
-                "wait_for_subscribers:=1",
-            ],
-        ),
-        "sim_node",
-    )
+    sim = start_process(sim_argv(scenario, real_time_factor), "sim_node")
     expected = int(DURATION_S * RATE_HZ) + 1
     graph.spin(60.0, until=lambda: not sim.running())
     graph.spin(1.0)  # the last messages in flight
@@ -66,6 +60,22 @@ def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
         "left_wing_lift_loss",
         "left_wing_drag_increase",
     ]
+
+
+@pytest.mark.timeout(90)
+def test_without_air_data_on_board_no_air_data_is_published(short_scenario, graph,
+                                                             start_process):
+    received = graph.subscribe({"/state": AircraftState, "/air_data": AirData}, STREAM_QOS)
+    scenario = short_scenario(3.0, sensors={"air_data": False, "noise": True})
+    sim = start_process(sim_argv(scenario, 0.0), "sim_node")
+    graph.spin(60.0, until=lambda: received["/state"])
+    publishers = {topic: graph.node.count_publishers(topic) for topic in ("/state", "/air_data")}
+    graph.spin(60.0, until=lambda: not sim.running())
+    graph.spin(1.0)
+    assert sim.wait(timeout_s=10) == 0, sim.output()
+    assert publishers == {"/state": 1, "/air_data": 0}
+    assert len(received["/state"]) == int(3.0 * RATE_HZ) + 1
+    assert received["/air_data"] == []
 
 
 @pytest.mark.timeout(60)

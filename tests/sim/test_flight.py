@@ -16,8 +16,10 @@ ALTITUDE = STATE_CHANNELS.index("altitude")
 
 def test_trim_holds_level_flight_for_60_s_in_calm_air(default_scenario):
     samples = fly(calm(default_scenario, 60.0))
-    altitude_error_m = column(samples, "state", ALTITUDE) - default_scenario.initial.altitude_m
-    airspeed_error_mps = column(samples, "airspeed_mps") - default_scenario.initial.airspeed_mps
+    altitude_error_m = (column(samples, "true_state", ALTITUDE)
+                        - default_scenario.initial.altitude_m)
+    airspeed_error_mps = (column(samples, "true_air_data", 0)
+                          - default_scenario.initial.airspeed_mps)
     print(
         f"calm 60 s: altitude error {np.abs(altitude_error_m).max():.3f} m, "
         f"airspeed error {np.abs(airspeed_error_mps).max():.3f} m/s"
@@ -33,7 +35,7 @@ def loop_errors(scenario, samples) -> tuple[np.ndarray, float]:
     closest_m = np.array(
         [np.hypot(*(position - waypoint).T).min() for waypoint in scenario.waypoints_ne_m]
     )
-    altitude_error_m = column(samples, "state", ALTITUDE) - scenario.initial.altitude_m
+    altitude_error_m = column(samples, "true_state", ALTITUDE) - scenario.initial.altitude_m
     after_30_s = column(samples, "time_s") >= 30.0
     return closest_m, float(np.abs(altitude_error_m[after_30_s]).max())
 
@@ -60,12 +62,14 @@ def test_loop_is_flown_in_wind_of_25_percent_of_airspeed(default_scenario):
 
 
 def test_wind_is_20_to_25_percent_of_airspeed_with_turbulence(default_scenario, default_flight):
+    """The default scenario's turbulence is from_wind (its statistics: test_turbulence.py)."""
     wind = column(default_flight, "wind_ned_mps")
     background = np.hypot(default_scenario.wind.north_mps, default_scenario.wind.east_mps)
     turbulence_std = (wind - wind.mean(axis=0)).std(axis=0)
     print(f"background {background:.1f} m/s, turbulence std NED {turbulence_std.round(2)} m/s")
     assert 0.2 <= background / default_scenario.initial.airspeed_mps <= 0.25
-    assert np.all(turbulence_std > 0.5)
+    assert default_scenario.wind.turbulence == "from_wind"
+    assert np.all(turbulence_std > 0.25)
 
 
 def test_same_seed_same_flight_other_seed_other_flight(default_scenario):

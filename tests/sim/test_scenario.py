@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
 import pytest
 import yaml
+from helpers.flights import fly
 from uav_sim.paths import scenarios_dir
-from uav_sim.scenario import ScenarioError, default_scenario_path, load_scenario
+from uav_sim.scenario import ScenarioError, SensorDropout, default_scenario_path, load_scenario
 
 
 def write(tmp_path, data) -> str:
@@ -56,14 +60,18 @@ def edit(data, dotted_key, value):
         ("duration_s", "long", "'duration_s' must be a finite number"),
         ("duration_s", -5, "'duration_s' must be positive"),
         ("seed", 1.5, "'seed' must be a non-negative integer"),
-        ("wind.turbulence", "strong", "'wind.turbulence' must be one of none, light"),
+        ("wind.turbulence", "strong", "'wind.turbulence' must be one of from_wind, none, light"),
+        ("sensors", "all", "'sensors' must be a mapping"),
+        ("sensors.pitot", True, "unknown key 'sensors.pitot' (known: air_data, noise)"),
+        ("sensors.air_data", "yes", "'sensors.air_data' must be true or false, got 'yes'"),
+        ("sensors.noise", 1, "'sensors.noise' must be true or false, got 1"),
         ("faults.0.name", "left_engine_fire", "'faults[0].name' must be one of"),
         ("faults.0.ramp_s", -1, "'faults[0].ramp_s' must be at least 0"),
         ("waypoints_ne_m", [[0, 0]], "needs at least two"),
         ("waypoints_ne_m", [[0, 0], [1, "x"]], "'waypoints_ne_m[1]' must be [north_m, east_m]"),
         (
             "sensor_dropouts",
-            [{"channel": "airspeed", "start_s": 1, "end_s": 2}],
+            [{"channel": "pitot", "start_s": 1, "end_s": 2}],
             "'sensor_dropouts[0].channel' must be one of",
         ),
         (
@@ -80,6 +88,33 @@ def test_bad_scenarios_name_the_file_and_the_key(tmp_path, default_data, key, va
     assert message in str(error.value)
     assert str(error.value).startswith(f"scenario {path}: ")
     assert "\n" not in str(error.value)
+
+
+def test_an_air_data_dropout_needs_air_data_on_board(tmp_path, default_data):
+    default_data["sensors"] = {"air_data": False}
+    default_data["sensor_dropouts"] = [{"channel": "sideslip", "start_s": 1, "end_s": 2}]
+    with pytest.raises(ScenarioError, match="'sensor_dropouts\\[0\\].channel' is 'sideslip', "
+                       "an air-data channel, but sensors.air_data is false"):
+        load_scenario(write(tmp_path, default_data))
+
+
+def test_sensors_default_to_air_data_and_noise(tmp_path, default_data):
+    del default_data["sensors"]
+    scenario = load_scenario(write(tmp_path, default_data))
+    assert scenario.sensors.air_data and scenario.sensors.noise
+    default_data["sensors"] = {"noise": False}
+    scenario = load_scenario(write(tmp_path, default_data))
+    assert scenario.sensors.air_data and not scenario.sensors.noise
+
+
+def test_air_data_dropouts_are_nan_in_the_air_data_only(default_scenario):
+    scenario = dataclasses.replace(
+        default_scenario, duration_s=3.0,
+        sensor_dropouts=(SensorDropout("angle_of_attack", 1.0, 2.0),))
+    samples = fly(scenario)
+    missing = [s.time_s for s in samples if np.isnan(s.air_data).any()]
+    assert missing == pytest.approx([1.0 + 0.05 * k for k in range(20)])
+    assert all(np.isnan(s.air_data).sum() <= 1 and np.isfinite(s.state).all() for s in samples)
 
 
 def test_unreadable_and_malformed_files(tmp_path):
