@@ -40,7 +40,7 @@ from uav_fault_estimator.qp_problem import WindowQP
 from uav_fault_estimator.reference_qp import clarabel_form, solve_reference
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.paths import default_parameters
-from uav_sim.scenario import default_scenario_path, load_scenario
+from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
 UPDATE_PERIOD_S = 0.5
@@ -235,7 +235,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--updates", type=int, default=300)
     parser.add_argument("--turbulence", default="light",
-                        choices=("none", "light", "moderate", "severe"))
+                        choices=TURBULENCE_LEVELS)
     arguments = parser.parse_args()
     flown = flown_sequence(400 + arguments.updates, arguments.turbulence)
     first = tuple(a[: 50 + arguments.updates] for a in flown)

@@ -3,10 +3,10 @@
 
     python scripts/calibrate_detector.py [--flights 12] [--bags BAG ...] [--out FILE]
 
-Flies the fault_free scenario (the default flight, moderate turbulence) with other
-turbulence seeds and background winds of 5-6.25 m/s towards directions 360/N degrees apart,
-samples it every sample_period_s, and fits: the RLS's initial parameters and covariance,
-the parameters' fault-free mean and spread, and the Weibull distributions of the GLRT
+Flies the fault_free scenario (the default flight: turbulence from the wind, noisy sensors,
+air data) with other seeds and background winds of 5-6.25 m/s towards directions 360/N
+degrees apart, samples it every sample_period_s, and fits: the RLS's initial parameters and
+covariance, the parameters' fault-free mean and spread, and the Weibull distributions of the GLRT
 statistic (per channel) and of the largest parameter deviation (self_tuning.calibrate).
 Writes the YAML that detector_node reads (default: the package's
 config/detector_calibration.yaml); the window and forgetting factor are detector_node's

@@ -23,14 +23,18 @@ from pathlib import Path
 
 from uav_fault_estimator import report
 from uav_fault_estimator.offline import fly_and_estimate
-from uav_sim.scenario import ScenarioError, default_scenario_path, load_scenario
-from uav_sim.wind import TURBULENCE_PRESETS
+from uav_sim.scenario import (
+    TURBULENCE_LEVELS,
+    ScenarioError,
+    default_scenario_path,
+    load_scenario,
+)
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("scenario", nargs="?", type=Path, default=default_scenario_path())
-    parser.add_argument("--turbulence", choices=["none", *TURBULENCE_PRESETS],
+    parser.add_argument("--turbulence", choices=TURBULENCE_LEVELS,
                         help="fly the scenario with this turbulence instead of its own")
     parser.add_argument("--true-wind", action="store_true",
                         help="give the models the true wind, not the filtered estimate")

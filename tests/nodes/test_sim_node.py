@@ -9,7 +9,7 @@ import pytest
 from geometry_msgs.msg import Vector3Stamped
 from rosgraph_msgs.msg import Clock
 from uav_fault_estimator.processes import ros2_run_argv
-from uav_fault_msgs.msg import AirData, AircraftState, ControlInputs, FaultVector, WindEstimate
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 from uav_sim.messages import stamp_seconds
 from uav_sim.node_tools import STREAM_QOS
 

@@ -12,6 +12,7 @@ and on a long run.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -93,8 +94,7 @@ def band_errors_db(gusts_uvw: np.ndarray, scales, segment_s: float) -> np.ndarra
         reference = 2 * math.pi * von_karman_psd(axis, 2 * math.pi * frequency,
                                                  scales.sigma_mps[k], scales.length_m[k],
                                                  AIRSPEED_MPS)
-        for band, (low, high) in enumerate(zip(BAND_EDGES_HZ[:-1], BAND_EDGES_HZ[1:],
-                                               strict=True)):
+        for band, (low, high) in enumerate(itertools.pairwise(BAND_EDGES_HZ)):
             inside = (frequency >= low) & (frequency < high)
             errors[k, band] = 10 * np.log10(power[inside, k].mean() / reference[inside].mean())
     return errors

@@ -104,8 +104,8 @@ def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,
 
 def fault_free_flights(count: int, first_seed: int,
                        first_direction_deg: float = 0.0) -> list[Scenario]:
-    """count variants of the shipped fault_free scenario (the default flight, moderate
-    turbulence): turbulence seeds from first_seed, background winds of 5.0-6.25 m/s (20-25 %
+    """count variants of the shipped fault_free scenario (the default flight in its own
+    turbulence and sensors): seeds from first_seed, background winds of 5.0-6.25 m/s (20-25 %
     of airspeed) towards directions 360/count degrees apart from first_direction_deg. The
     detector's calibration flights and, with other seeds, its held-out test flights."""
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
