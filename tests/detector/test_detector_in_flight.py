@@ -5,8 +5,8 @@
 - False alarms: on 12 held-out fault-free flights (seeds 201-212, winds towards directions
   halfway between the calibration's) each test's alarm rate per sample is within a factor
   of 3 of the designed P_FA, and the combined alarm's is lower than every single test's.
-- Detection: in aileron_loss.yaml (90 % aileron effectiveness lost at 150 s, moderate
-  turbulence) the combined alarm rises within 10 s of the onset and never before it.
+- Detection: in aileron_loss.yaml (90 % aileron effectiveness lost at 150 s, turbulence
+  from the wind, noisy sensors) the combined alarm rises within 10 s of the onset and never before it.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from uav_sim.scenario import Scenario
+from uav_sim.scenario import Scenario, SensorSuite
 from uav_sim.simulation import Sample, Simulation
 
 
@@ -19,11 +19,13 @@ def fly(scenario: Scenario) -> list[Sample]:
 
 
 def calm(scenario: Scenario, duration_s: float) -> Scenario:
-    """The scenario without wind, turbulence or faults, cut to duration_s."""
+    """The scenario without wind, turbulence, faults or sensor noise, cut to duration_s: the
+    models' own accuracy, which sensor noise would hide."""
     wind = dataclasses.replace(
         scenario.wind, north_mps=0.0, east_mps=0.0, down_mps=0.0, turbulence="none"
     )
-    return dataclasses.replace(scenario, wind=wind, faults=(), duration_s=duration_s)
+    return dataclasses.replace(scenario, wind=wind, faults=(), duration_s=duration_s,
+                               sensors=SensorSuite(noise=False))
 
 
 def column(samples: list[Sample], field: str, index: int | None = None) -> np.ndarray:

@@ -107,7 +107,10 @@ class AircraftPredictor:
         for axis, value_radps in zip("pqr", body_rates_radps, strict=True):
             fdm[f"ic/{axis}-rad_sec"] = float(value_radps)
         for channel, (name, unit) in _COMMANDS.items():
-            fdm[name] = float(controls[_CONTROL[channel]]) / unit
+            command = float(controls[_CONTROL[channel]]) / unit
+            # The flap's FCS takes commands 0..1 only (below 0 JSBSim's aerosurface_scale
+            # gives NaN); sensor noise makes a retracted flap read a little below 0.
+            fdm[name] = max(command, 0.0) if channel == "flap" else command
         fdm[FUEL_LOADED_LBS] = float(state[_STATE["fuel_mass"]]) / KG_PER_LB
         fdm.run_ic()
         density_kg_m3 = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
