@@ -6,7 +6,8 @@
   halfway between the calibration's) each test's alarm rate per sample is within a factor
   of 3 of the designed P_FA, and the combined alarm's is lower than every single test's.
 - Detection: in aileron_loss.yaml (90 % aileron effectiveness lost at 150 s, turbulence
-  from the wind, noisy sensors) the combined alarm rises within 10 s of the onset and never before it.
+  from the wind, noisy sensors) the combined alarm rises within 10 s of the onset and never
+  before it.
 """
 
 from __future__ import annotations
