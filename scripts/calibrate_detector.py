@@ -25,7 +25,7 @@ from pathlib import Path
 
 import yaml
 from ament_index_python.packages import get_package_share_directory
-from uav_fault_estimator.offline import fault_free_flights, fly_on_grid
+from uav_fault_estimator.offline import fault_free_flights, fly_on_grid_each
 from uav_fault_estimator.recording import flight_from_recording, project_typestore
 from uav_fault_estimator.self_tuning import calibrate
 from uav_sim.paths import default_parameters
@@ -39,7 +39,7 @@ SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
 def simulated(count: int) -> tuple[list, str]:
     """count fault-free flights flown now, and the calibration file's header saying which."""
     scenarios = fault_free_flights(count, FIRST_SEED)
-    flights = [fly_on_grid(scenario, SAMPLE_PERIOD_S)[:3] for scenario in scenarios]
+    flights = [flight[:3] for flight in fly_on_grid_each(scenarios, SAMPLE_PERIOD_S)]
     header = (f"# Written by scripts/calibrate_detector.py: {len(scenarios)} fault-free flights "
               f"of '{scenarios[0].name}' ({scenarios[0].duration_s:g} s each, "
               f"{scenarios[0].wind.turbulence} turbulence),\n# seeds "

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from uav_fault_estimator.offline import fault_free_flights, fly_on_grid
+from uav_fault_estimator.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
 from uav_fault_estimator.self_tuning import CHANNELS, Calibration, load_calibration, run_detector
 from uav_sim.paths import default_parameters, scenarios_dir
 from uav_sim.scenario import load_scenario
@@ -54,8 +54,8 @@ def test_the_shipped_calibration_is_what_the_command_makes(tmp_path):
 
 @pytest.mark.timeout(180)
 def test_false_alarm_rates_on_held_out_flights(calibration):
-    flights = [fly_on_grid(s, calibration.sample_period_s)[:3]
-               for s in fault_free_flights(12, first_seed=201, first_direction_deg=15.0)]
+    scenarios = fault_free_flights(12, first_seed=201, first_direction_deg=15.0)
+    flights = [flight[:3] for flight in fly_on_grid_each(scenarios, calibration.sample_period_s)]
     raised = np.vstack([alarms(run_detector(calibration, flight, P_FA)) for flight in flights])
     rates = raised.mean(axis=0)
     print(f"designed P_FA {P_FA} per sample; {len(raised)} samples; measured: "

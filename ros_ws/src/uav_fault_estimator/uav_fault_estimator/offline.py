@@ -6,8 +6,12 @@ benchmarks; metrics.py turns the result into metrics.json's figures."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
-from collections.abc import Mapping
+import multiprocessing
+import os
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -90,6 +94,16 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> tuple[np.ndarray, ...]:
     return (np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
             np.array([s.controls for s in samples]),
             np.array([s.seeded_faults_pct for s in samples]))
+
+
+def fly_on_grid_each(scenarios: Sequence[Scenario],
+                     period_s: float) -> list[tuple[np.ndarray, ...]]:
+    """fly_on_grid of every scenario, one process per core: the flights are independent,
+    so the results are those of flying them one after the other. Spawned, not forked:
+    the caller may be a ROS process with threads of its own."""
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=os.cpu_count(), mp_context=context) as pool:
+        return list(pool.map(fly_on_grid, scenarios, itertools.repeat(period_s)))
 
 
 def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,
