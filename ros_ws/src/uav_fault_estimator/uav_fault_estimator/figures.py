@@ -137,13 +137,13 @@ def _wind_figure(data: dict[str, list], path: Path) -> Path:
     triangle_t, triangle = _wind_triangle(data["/state"], data.get("/air_data") or [])
     filtered = data["/wind/filtered"]
     for k, (component, axis) in enumerate(zip(WIND_AXES, axes, strict=True)):
-        if true_wind:
+        if triangle.size:
+            axis.plot(triangle_t, triangle[:, k], linewidth=0.6, alpha=0.6,
+                      label="wind triangle (air data)")
+        if true_wind:  # on top: the triangle's noise would hide it
             axis.plot(_stamps(true_wind), [(m.vector.x, m.vector.y, m.vector.z)[k]
                                            for m in true_wind],
-                      color="0.6", linewidth=0.8, label="true")
-        if triangle.size:
-            axis.plot(triangle_t, triangle[:, k], linewidth=0.6, alpha=0.8,
-                      label="wind triangle (air data)")
+                      color="k", linewidth=0.6, label="true")
         axis.plot(_stamps(filtered), [getattr(m, f"{component}_mps") for m in filtered],
                   linewidth=1.5, label=f"filtered, tau {filtered[0].filter_time_constant_s:g} s")
         axis.set_ylabel(f"wind {component} [m/s]")
