@@ -50,17 +50,25 @@ def header(time_s: float, frame_id: str = "") -> Header:
     return Header(stamp=stamp(time_s), frame_id=frame_id)
 
 
-def state_message(time_s: float, state: Sequence[float]) -> AircraftState:
-    """AircraftState from a (14,) array in STATE_CHANNELS order (NaN: channel missing)."""
-    message = AircraftState(header=header(time_s, NED_FRAME))
-    for field, value in zip(STATE_FIELDS, state, strict=True):
+def _filled(message, fields: Sequence[str], values: Sequence[float]):
+    """message with each of fields set to its value as a float."""
+    for field, value in zip(fields, values, strict=True):
         setattr(message, field, float(value))
     return message
 
 
+def _values(message, fields: Sequence[str]) -> np.ndarray:
+    return np.array([getattr(message, field) for field in fields], dtype=float)
+
+
+def state_message(time_s: float, state: Sequence[float]) -> AircraftState:
+    """AircraftState from a (14,) array in STATE_CHANNELS order (NaN: channel missing)."""
+    return _filled(AircraftState(header=header(time_s, NED_FRAME)), STATE_FIELDS, state)
+
+
 def state_array(message: AircraftState) -> np.ndarray:
     """(14,) array in STATE_CHANNELS order from an AircraftState."""
-    return np.array([getattr(message, field) for field in STATE_FIELDS], dtype=float)
+    return _values(message, STATE_FIELDS)
 
 
 def controls_message(time_s: float, controls: Sequence[float]) -> ControlInputs:
@@ -78,15 +86,12 @@ def controls_array(message: ControlInputs) -> np.ndarray:
 
 def air_data_message(time_s: float, air_data: Sequence[float]) -> AirData:
     """AirData from a (3,) array in AIR_DATA_CHANNELS order (NaN: channel missing)."""
-    message = AirData(header=header(time_s, BODY_FRAME))
-    for field, value in zip(AIR_DATA_FIELDS, air_data, strict=True):
-        setattr(message, field, float(value))
-    return message
+    return _filled(AirData(header=header(time_s, BODY_FRAME)), AIR_DATA_FIELDS, air_data)
 
 
 def air_data_array(message: AirData) -> np.ndarray:
     """(3,) array in AIR_DATA_CHANNELS order from an AirData message."""
-    return np.array([getattr(message, field) for field in AIR_DATA_FIELDS], dtype=float)
+    return _values(message, AIR_DATA_FIELDS)
 
 
 def wind_message(time_s: float, wind_ned_mps: Sequence[float], tau_s: float) -> WindEstimate:
