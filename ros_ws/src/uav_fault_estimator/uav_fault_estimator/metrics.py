@@ -1,10 +1,12 @@
 """The run's figures of merit (DESIGN.md, metrics.json) from estimates and seeded faults.
 
 Per estimated fault, over estimate stamps at or after settle_s: the error of the estimate
-against the seeded value at the same stamp (RMS and largest), the detection delay from the
-seeded fault's start to the first estimate stamp at which the estimate reaches the
-detection threshold, and, for faults never seeded, whether the estimate reached the
-threshold at all (a false alarm). Plus the solver's times and failures. No ROS here.
+against the seeded value at the same stamp (RMS and largest); the detection delay from the
+first stamp at which the seeded value reaches the detection threshold (a step: its onset; a
+ramp: where it crosses the threshold) to the first estimate stamp at or after it at which
+the estimate reaches the threshold; and whether the estimate reached the threshold while the
+seeded value was below it (a false alarm: of a fault never seeded, or of a seeded one whose
+estimate rose before it did). Plus the solver's times and failures. No ROS here.
 """
 
 from __future__ import annotations
@@ -44,6 +46,12 @@ class SeededSeries:
         index = np.searchsorted(self.stamps_s, stamps_s + 1e-9, side="right") - 1
         return np.where(index >= 0, column[np.clip(index, 0, None)], 0.0)
 
+    def reaches_s(self, name: str, threshold_pct: float) -> float | None:
+        """The first stamp at which the seeded value reaches threshold_pct; None if never."""
+        column = self.values_pct[:, list(self.names).index(name)]
+        reached = np.flatnonzero(column >= threshold_pct)
+        return float(self.stamps_s[reached[0]]) if reached.size else None
+
     def start_s(self, name: str) -> float | None:
         """When the fault starts: the last stamp with value 0 before it first departs from
         0; None when it never does."""
@@ -75,12 +83,13 @@ def fault_metrics(estimates: EstimateSeries, seeded: SeededSeries, settle_s: flo
             "max_abs_error_pct": round(float(np.abs(error).max()), 3) if error.size else None,
             "detection_delay_s": None,
         }
-        if start_s is not None:
-            after = (estimates.stamps_s >= start_s) & (values >= threshold_pct)
+        reached_s = seeded.reaches_s(name, threshold_pct) if start_s is not None else None
+        if reached_s is not None:
+            after = (estimates.stamps_s >= reached_s - 1e-9) & (values >= threshold_pct)
             if after.any():
                 entry["detection_delay_s"] = round(
-                    float(estimates.stamps_s[after][0] - start_s), 3)
-        elif np.any(values[settled] >= threshold_pct):
+                    float(estimates.stamps_s[after][0] - reached_s), 3)
+        if np.any(settled & (values >= threshold_pct) & (truth < threshold_pct)):
             false_alarms.append(name)
         faults[name] = entry
     return faults, false_alarms
