@@ -47,14 +47,14 @@ def random_problem(models: list, seed: int, bounded: bool, lost_fraction: float)
     rng = np.random.default_rng(seed)
     stages, m, p = 40, 6, len(models)
     bounds = [(-2.0, 20.0) if bounded else FREE] * p
-    problem = WindowQP(stages, models, bounds, np.full(p, 0.5))
+    problem = WindowQP(stages, models, bounds)
     s = rng.normal(size=(stages, m, p))
     f = np.cumsum(np.abs(rng.normal(scale=0.3, size=(stages, p))), axis=0)
     noise_sd = 0.1
     y = np.einsum("tmp,tp->tm", s, f) + rng.normal(scale=noise_sd, size=(stages, m))
     weight = np.where(rng.random((stages, m)) < lost_fraction, 0.0, 1.0 / noise_sd**2)
     gram, linear = stage_normal_equations(y, s, weight)
-    problem.set_data(gram, linear, rng.normal(size=p))
+    problem.set_data(gram, linear, np.diag(np.full(p, 0.5)), rng.normal(size=p))
     return problem
 
 

@@ -118,6 +118,19 @@ def test_stamp_matcher_releases_complete_sets_in_stamp_order() -> None:
 
 
 @pytest.mark.timeout(30)
+def test_an_optional_stream_is_waited_for_only_while_it_is_published() -> None:
+    published = {"air": True}
+    matcher = StampMatcher(("state",), ("air",), lambda stream: published[stream])
+    assert matcher.add("state", 100, "s1") == []                      # air may still come
+    assert matcher.add("air", 100, "a1") == [(100, {"state": "s1", "air": "a1"})]
+    assert matcher.add("state", 200, "s2") == []
+    assert matcher.add("state", 300, "s3") == [(200, {"state": "s2"})]  # air of 200 lost
+    published["air"] = False
+    assert matcher.add("state", 400, "s4") == [(300, {"state": "s3"}), (400, {"state": "s4"})]
+    assert matcher.dropped_sets == 0
+
+
+@pytest.mark.timeout(30)
 def test_a_non_finite_prediction_skips_the_sample_and_keeps_the_state() -> None:
     def factory_with_a_hole(faults_pct):
         model = factory(faults_pct)

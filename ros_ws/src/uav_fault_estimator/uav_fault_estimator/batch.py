@@ -76,9 +76,9 @@ class BatchEstimator:
             self.cycles,
             [fault.build_model() for fault in config.faults],
             [(fault.lower_pct, fault.upper_pct) for fault in config.faults],
-            config.r_inv,
         )
-        problem.set_data(np.array(self._gram), np.array(self._linear), config.prior_pct)
+        problem.set_data(np.array(self._gram), np.array(self._linear), np.diag(config.r_inv),
+                         config.prior_pct)
         guess = np.zeros(problem.n_variables)
         previous = self._last.cycles_pct
         guess[problem.f_index] = config.prior_pct

@@ -13,6 +13,8 @@ from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_fault_estimator.fault_models import SCALE_PARAMETER, FaultModel, make_model
 from uav_fault_estimator.residuals import WIND_ERROR_NAMES
 
+ARRIVAL_CENTRES = ("filter", "previous_window")
+
 
 @dataclass
 class FaultConfig:
@@ -54,8 +56,11 @@ class EstimatorConfig:
     """Moving-horizon / batch MAP estimator parameters.
 
     horizon: N samples in the window; q_diag: residual noise variances Q (one per
-    residual channel) [residual unit²]; r_diag_pct2: handover covariance R (one per
-    fault) [%²]; faults: the estimated faults; solver: ProxSuite settings.
+    residual channel) [residual unit²]; r_diag_pct2: the arrival cost's covariance R before
+    any data (one per fault) [%²]; arrival_inflation (>= 1) and arrival_floor_pct2 (one per
+    fault, or None for 0) [%²]: see arrival_cost.ArrivalCost; arrival_centre: "filter" (the
+    arrival filter's mean) or "previous_window" (the previous window's estimate of the first
+    point, as UAV eq. 17); faults: the estimated faults; solver: ProxSuite settings.
     Defaults: the embedded UAV paper's setting, N = 50, four monotonic increasing faults.
     """
 
@@ -66,11 +71,23 @@ class EstimatorConfig:
         default_factory=lambda: [FaultConfig(name) for name in PAPER_FAULT_NAMES]
     )
     solver: SolverSettings = field(default_factory=SolverSettings)
+    arrival_inflation: float = 1.0
+    arrival_floor_pct2: tuple[float, ...] | None = None
+    arrival_centre: str = "filter"
 
     def validate(self) -> None:
         """Raise ValueError naming the first inconsistent parameter."""
         if self.horizon < 2:
             raise ValueError(f"horizon must be at least 2, got {self.horizon}")
+        if self.arrival_centre not in ARRIVAL_CENTRES:
+            raise ValueError(f"arrival_centre must be one of {', '.join(ARRIVAL_CENTRES)}, "
+                             f"got {self.arrival_centre!r}")
+        if not (math.isfinite(self.arrival_inflation) and self.arrival_inflation >= 1.0):
+            raise ValueError(f"arrival_inflation must be at least 1, got "
+                             f"{self.arrival_inflation}")
+        floor = self.arrival_floor
+        if floor.size != len(self.faults) or not np.all(np.isfinite(floor) & (floor >= 0)):
+            raise ValueError("arrival_floor_pct2 needs one non-negative entry per fault")
         if len(self.r_diag_pct2) != len(self.faults):
             raise ValueError("r_diag_pct2 needs one entry per fault")
         for name, values in (("q_diag", self.q_diag), ("r_diag_pct2", self.r_diag_pct2)):
@@ -90,6 +107,13 @@ class EstimatorConfig:
         return 1.0 / np.asarray(self.r_diag_pct2, dtype=float)
 
     @property
+    def arrival_floor(self) -> np.ndarray:
+        """The arrival cost's least variance per fault [%²]."""
+        if self.arrival_floor_pct2 is None:
+            return np.zeros(len(self.faults))
+        return np.asarray(self.arrival_floor_pct2, dtype=float)
+
+    @property
     def prior_pct(self) -> np.ndarray:
         """The faults before any data [%]."""
         return np.array([fault.prior_pct for fault in self.faults])
@@ -101,7 +125,8 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
     columns are the faults, then the wind-estimate errors when estimate_wind_errors."""
     names = list(parameters["fault_names"])
     per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
-                 "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2")
+                 "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2",
+                 "arrival_floor_variances_pct2")
     for key in per_fault:
         if len(parameters[key]) != len(names):
             raise ValueError(f"{key} has {len(parameters[key])} entries for {len(names)} faults")
@@ -121,10 +146,12 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
             upper_pct=parameters["upper_bounds_pct"][k], prior_pct=parameters["prior_pct"][k],
         ))
     handover = list(parameters["handover_variances_pct2"])
+    floor = list(parameters["arrival_floor_variances_pct2"])
     if parameters["estimate_wind_errors"]:  # nuisance parameters: random walks [m/s]
         faults += [FaultConfig(name, "random_walk", {"sigma": parameters["wind_error_sigma_mps"]})
                    for name in WIND_ERROR_NAMES]
         handover += [parameters["wind_error_handover_variance_m2ps2"]] * len(WIND_ERROR_NAMES)
+        floor += [0.0] * len(WIND_ERROR_NAMES)
     config = EstimatorConfig(
         horizon=parameters["horizon"],
         q_diag=tuple(parameters["residual_variances"]),
@@ -132,6 +159,9 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
         faults=faults,
         solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
                               max_iter=parameters["solver_max_iter"]),
+        arrival_inflation=parameters["arrival_inflation"],
+        arrival_floor_pct2=tuple(floor),
+        arrival_centre=parameters["arrival_centre"],
     )
     if len(config.q_diag) != channels:
         raise ValueError(f"residual_variances needs {channels} entries")

@@ -19,23 +19,32 @@ Streams = dict[str, tuple[type, Callable[[Any], Any]]]
 class MatchedStreams:
     """Subscribes each topic (reliable, keep-all) in the order given: sim_node's
     wait_for_subscribers counts `state` subscriptions, so list `state` last. Complete sets
-    go to on_sample(time_s, arrays by topic) in stamp order; a stamp not newer than the
+    go to on_sample(time_s, arrays by topic) in stamp order, with the optional topics'
+    arrays where they came (waited for while the topic has a publisher, until the next
+    stamp's set is complete: StampMatcher); a stamp not newer than the
     last processed one (a restarted source) is warned of once (ending with restart_note:
     what on_restart does), resets the matcher and calls on_restart() first."""
 
     def __init__(self, node: Node, streams: Streams,
                  on_sample: Callable[[float, dict[str, Any]], None],
-                 on_restart: Callable[[], None], restart_note: str) -> None:
+                 on_restart: Callable[[], None], restart_note: str,
+                 optional: Streams | None = None) -> None:
         self.node = node
-        self.to_array = {topic: convert for topic, (_, convert) in streams.items()}
-        self.matcher = StampMatcher(tuple(streams))
+        optional = optional or {}
+        self.to_array = {topic: convert for topic, (_, convert)
+                         in {**optional, **streams}.items()}
+        self.matcher = StampMatcher(tuple(streams), tuple(optional), self.has_publisher)
         self.on_sample, self.on_restart = on_sample, on_restart
         self.restart_note = restart_note
         self.restarts = 0
-        for topic, (message_type, _) in streams.items():
+        for topic, (message_type, _) in {**optional, **streams}.items():
             node.create_subscription(
                 message_type, topic, lambda message, topic=topic: self.receive(topic, message),
                 STREAM_QOS)
+
+    def has_publisher(self, topic: str) -> bool:
+        """Whether some node publishes this topic now."""
+        return self.node.count_publishers(topic) > 0
 
     @property
     def dropped_sets(self) -> int:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uav_fault_estimator.arrival_cost import ArrivalCost, increment_prior
 from uav_fault_estimator.estimator_config import EstimatorConfig
 from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveOutcome, SolveStatus
 from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
@@ -43,12 +44,15 @@ class MovingHorizonEstimator:
         config.validate()
         self.config = config
         n, m, p = config.horizon, len(config.q_diag), len(config.faults)
+        models = [fault.build_model() for fault in config.faults]
         self.problem = WindowQP(
-            n,
-            [fault.build_model() for fault in config.faults],
-            [(fault.lower_pct, fault.upper_pct) for fault in config.faults],
-            config.r_inv,
-        )
+            n, models, [(fault.lower_pct, fault.upper_pct) for fault in config.faults])
+        terms = [model.increment_terms() for model in models]
+        increments = np.array([increment_prior(term) for term in terms])
+        self.arrival = ArrivalCost(
+            np.array([term.coefficient for term in terms]), increments[:, 0],
+            increments[:, 1], config.prior_pct, np.diag(config.r_diag_pct2),
+            config.arrival_inflation, config.arrival_floor)
         self.solver = ProxQPSolver(self.problem, config.solver)
         self._q_inv = config.q_inv
         self._y = np.zeros((n, m))
@@ -56,6 +60,7 @@ class MovingHorizonEstimator:
         self._weight = np.zeros((n, m))
         # The last good solution, shifted once per update: the warm start, and at stage 0
         # the previous window's estimate of the new window's first point (UAV eq. 17).
+        # The window starts empty: its first point is N - 1 samples before the first one.
         self._x = np.zeros(self.problem.n_variables)
         self._x[self.problem.f_index] = config.prior_pct
         self._y_dual = np.zeros(self.problem.b.size)
@@ -74,6 +79,10 @@ class MovingHorizonEstimator:
         channels. A window not yet full is solved with its empty samples weighted 0.
         """
         start = time.perf_counter()
+        # The oldest sample leaves the window: into the arrival cost, which then moves to
+        # the new first point.
+        self.arrival.absorb(self._y[0], self._s[0], self._weight[0])
+        self.arrival.predict()
         sample_ok = self._push_sample(y, s, valid)
         self._shift_guess()
         if not sample_ok:
@@ -81,7 +90,9 @@ class MovingHorizonEstimator:
         if not self._weight.any():  # no usable residual in the window yet
             return self._result(SolveStatus.WAITING, None, start)
         gram, linear = stage_normal_equations(self._y, self._s, self._weight)
-        self.problem.set_data(gram, linear, self._x[self.problem.f_index[0]])
+        centre = (self.arrival.mean if self.config.arrival_centre == "filter"
+                  else self._x[self.problem.f_index[0]])
+        self.problem.set_data(gram, linear, self.arrival.information, centre)
         outcome = self.solver.solve(self._x, self._y_dual, self._z_dual)
         if outcome.status is SolveStatus.SOLVED:
             self._x, self._y_dual, self._z_dual = outcome.x, outcome.y, outcome.z

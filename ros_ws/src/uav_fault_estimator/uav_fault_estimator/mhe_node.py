@@ -38,7 +38,12 @@ PARAMETERS = {
     "prior_pct": "per fault: f before any data [%]",
     "horizon": "N: residual samples in the moving window",
     "residual_variances": "Q: noise variance of each of the 6 residual channels",
-    "handover_variances_pct2": "R of eq. 17: variance of the handed-over first point [%^2]",
+    "handover_variances_pct2": "R of eq. 17: per fault, the arrival cost's variance before any "
+    "data [%^2]",
+    "arrival_inflation": "factor (>= 1) on the arrival cost's covariance every sample",
+    "arrival_floor_variances_pct2": "per fault: the least variance of the arrival cost [%^2]",
+    "arrival_centre": "where the arrival cost is centred: filter (the arrival filter's mean) "
+    "or previous_window (the previous window's estimate, as the paper)",
     "estimate_wind_errors": "also estimate the wind-estimate errors (S columns *_error of "
     "residual_node) as random-walk nuisance parameters",
     "wind_error_sigma_mps": "random-walk step of each wind error per residual sample [m/s]",

@@ -40,9 +40,10 @@ def fly_and_estimate(
     The estimator's parameters are mhe_node's defaults, then the scenario's `estimator`
     overrides, then mhe_overrides. Returns the published estimates (what mhe_node would
     publish; solve times are the estimator's update times) and the seeded faults sampled
-    at the same stamps. true_wind: the models get the true wind (background and
-    turbulence) instead of the filtered estimate, which no aircraft has: a bound on what
-    better wind knowledge could give.
+    at the same stamps. The models fly the air data where the aircraft has it, as
+    residual_node does. true_wind: the models get the true wind (background and
+    turbulence) instead, which no aircraft has: a bound on what better wind knowledge
+    could give.
     """
     residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
                 **(residual_overrides or {})}
@@ -57,7 +58,8 @@ def fly_and_estimate(
     sample = simulation.sample()
     while True:
         wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
-        result = generator.update(sample.time_s, sample.state, sample.controls, wind)
+        result = generator.update(sample.time_s, sample.state, sample.controls, wind,
+                                  None if true_wind else sample.air_data)
         on_grid = abs(sample.time_s / period_s - round(sample.time_s / period_s)) < 1e-9
         if result is not None and on_grid:
             estimate = estimator.update(result.residual, result.sensitivity, result.valid)

@@ -62,8 +62,8 @@ class WindowQP:
     """The fault estimation QP for `stages` stages and the given per-fault models.
 
     Inputs at construction: stages T ≥ 1; models, one per fault; bounds_pct, one
-    (lower, upper) per fault [%] (±inf for none); r_inv_diag (p,) [1/%²], the inverse
-    covariance of the initial-point handover. Per update, `set_data` refills H and g.
+    (lower, upper) per fault [%] (±inf for none). Per update, `set_data` refills H and g
+    with the data and the arrival cost on the first stage.
     """
 
     def __init__(
@@ -71,7 +71,6 @@ class WindowQP:
         stages: int,
         models: Sequence[FaultModel],
         bounds_pct: Sequence[tuple[float, float]],
-        r_inv_diag: np.ndarray,
     ) -> None:
         if stages < 1:
             raise ValueError(f"the QP needs at least one stage, got {stages}")
@@ -94,11 +93,6 @@ class WindowQP:
             self._add_absolute_cost(k, terms[k], slack_index[:, j])
         for k, bounds in enumerate(bounds_pct):
             self._add_bounds(k, terms[k], bounds)
-        # UAV eq. 17 / EF eq. 26: ½ (f(0) - f_prior)ᵀ R⁻¹ (f(0) - f_prior), quadratic part.
-        h_rows.append(self.f_index[0])
-        h_cols.append(self.f_index[0])
-        h_vals.append(np.asarray(r_inv_diag, dtype=float))
-        self.r_inv_diag = np.asarray(r_inv_diag, dtype=float)
         self._build_hessian(h_rows, h_cols, h_vals)
         self.A, self.b = self._rows.equalities()
         self.C, self.l, self.u = self._rows.inequalities()
@@ -191,7 +185,7 @@ class WindowQP:
         block_cols = np.tile(self.f_index, (1, p)).reshape(stages, p, p)
         rows = np.concatenate([*h_rows, block_rows.ravel()])
         cols = np.concatenate([*h_cols, block_cols.ravel()])
-        model_values = np.concatenate(h_vals)
+        model_values = np.concatenate([*h_vals, np.zeros(0)])
         pattern = sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
         pattern.sum_duplicates()
         pattern.sort_indices()
@@ -201,19 +195,22 @@ class WindowQP:
         self._h_model_data = np.zeros(pattern.nnz)
         np.add.at(self._h_model_data, model_position, model_values)
 
-    def set_data(self, gram: np.ndarray, linear: np.ndarray, prior_pct: np.ndarray) -> None:
-        """Refill H and g in place from the data term and the handover prior.
+    def set_data(self, gram: np.ndarray, linear: np.ndarray, prior_information: np.ndarray,
+                 prior_pct: np.ndarray) -> None:
+        """Refill H and g in place from the data term and the arrival cost.
 
         Inputs: gram (T, p, p) and linear (T, p) from `stage_normal_equations` (summed per
-        stage); prior_pct (p,), the previous window's estimate of f(0) [%] (UAV eq. 17).
+        stage); the arrival cost ½ (f(0) - prior)ᵀ Π⁻¹ (f(0) - prior) (UAV eq. 17, EF eq. 26)
+        as prior_information Π⁻¹ (p, p) [1/%²] and prior_pct (p,) [%].
         """
         data = self.H.data
         np.copyto(data, self._h_model_data)
         data[self._block_position] += gram
+        data[self._block_position[0]] += prior_information
         g = self.g
         np.copyto(g, self.g_model)
         g[self.f_index] -= linear
-        g[self.f_index[0]] -= self.r_inv_diag * prior_pct
+        g[self.f_index[0]] -= prior_information @ prior_pct
 
     def objective(self, x: np.ndarray) -> float:
         """½ xᵀHx + gᵀx (without the constant), for checks and comparisons."""

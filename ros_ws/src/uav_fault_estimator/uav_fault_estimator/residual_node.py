@@ -1,7 +1,9 @@
 """residual_node: acceleration residuals and fault sensitivities from the sensor streams.
 
-Subscribes `state`, `controls`, `wind/filtered` (matched by stamp); publishes `residuals`
-(Residuals) every update_period_s of sim time, and `/diagnostics`.
+Subscribes `state`, `controls`, `wind/filtered` and, where the aircraft has it, `air_data`
+(matched by stamp); publishes `residuals` (Residuals) every update_period_s of sim time, and
+`/diagnostics`. The models fly the air data when a sample has usable air data and the
+filtered wind otherwise (residuals.py); a fallback is a WARN on /diagnostics.
 """
 
 from __future__ import annotations
@@ -11,8 +13,8 @@ import sys
 import time
 
 from rclpy.node import Node
-from uav_fault_msgs.msg import AircraftState, ControlInputs, Residuals, WindEstimate
-from uav_sim.messages import controls_array, header, state_array, wind_array
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
+from uav_sim.messages import air_data_array, controls_array, header, state_array, wind_array
 from uav_sim.node_tools import (
     OK,
     STREAM_QOS,
@@ -24,7 +26,7 @@ from uav_sim.node_tools import (
 
 from uav_fault_estimator.matched_streams import MatchedStreams
 from uav_fault_estimator.prediction import residual_generator
-from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, ResidualSample
+from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, ResidualSample
 
 PARAMETERS = {
     "fault_names": "faults whose sensitivities are computed: the columns of S",
@@ -38,6 +40,7 @@ PARAMETERS = {
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array),
            "wind/filtered": (WindEstimate, wind_array), "state": (AircraftState, state_array)}
+OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array)}
 # Stamps within this fraction of a period of the publication grid count as on it.
 STAMP_TOLERANCE = 1e-6
 
@@ -55,10 +58,12 @@ class ResidualNode(Node):
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
         self.generator = residual_generator(p)
         self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
-        self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset")
+        self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset",
+                                      OPTIONAL_STREAMS)
         self.diagnostics = Diagnostics(self)
         self.next_publish_s: float | None = None
-        self.counts = {"samples": 0, "published": 0, "rejected_samples": 0}
+        self.counts = {"samples": 0, "published": 0, "rejected_samples": 0,
+                       "filtered_wind_samples": 0}
         self.core_time_s = 0.0
 
     def restart(self) -> None:
@@ -71,8 +76,8 @@ class ResidualNode(Node):
         started = time.perf_counter()
         try:
             sample = self.generator.update(
-                time_s, payloads["state"], payloads["controls"], payloads["wind/filtered"]
-            )
+                time_s, payloads["state"], payloads["controls"], payloads["wind/filtered"],
+                payloads.get("air_data"))
         except ValueError as error:  # a sample the model cannot evaluate: skipped
             self.counts["rejected_samples"] += 1
             self.get_logger().warning(f"sample at {time_s:.3f} s skipped: {error}")
@@ -83,6 +88,8 @@ class ResidualNode(Node):
         self.counts["samples"] += 1
         if sample is None:
             return
+        if sample.wind_source != WIND_AIR_DATA:
+            self.counts["filtered_wind_samples"] += 1
         period_s = self.parameters["update_period_s"]
         if self.next_publish_s is None:  # the first publication on the period's grid
             self.next_publish_s = math.ceil(time_s / period_s - STAMP_TOLERANCE) * period_s
@@ -99,6 +106,7 @@ class ResidualNode(Node):
             observed=sample.observed.tolist(),
             predicted=sample.predicted.tolist(),
             valid=sample.valid.tolist(),
+            wind_source=sample.wind_source,
             fault_names=list(self.generator.column_names),
             sensitivity=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
         )
@@ -115,11 +123,16 @@ class ResidualNode(Node):
     def report(self, sample: ResidualSample) -> None:
         invalid = [name for name, ok in zip(RESIDUAL_CHANNELS, sample.valid, strict=True)
                    if not ok]
+        source = "air data" if sample.wind_source == WIND_AIR_DATA else "filtered wind"
+        problems = []
+        if invalid:
+            problems.append("rows invalid (a state channel is missing): " + ", ".join(invalid))
+        if sample.wind_source != WIND_AIR_DATA and self.streams.has_publisher("air_data"):
+            problems.append("no usable air data: the models fly the filtered wind")
         self.diagnostics.update(
-            WARN if invalid else OK,
-            "rows invalid (a state channel is missing): " + ", ".join(invalid)
-            if invalid else "residuals valid",
-            {**self.health(), "invalid_rows": ",".join(invalid) or "none"},
+            WARN if problems else OK, "; ".join(problems) or f"residuals valid ({source})",
+            {**self.health(), "invalid_rows": ",".join(invalid) or "none",
+             "wind_source": source},
         )
 
 def main(args: list[str] | None = None) -> int:

@@ -19,6 +19,13 @@ model with the filtered wind shifted by a step along north, east or down, differ
 same way. Gusts the 10 s filtered wind misses are the largest part of the residual in
 turbulence; with these columns an estimator can take them out as nuisance parameters.
 
+Air data: given measured airspeed, alpha and beta (uav_sim's AirData), the models fly the
+measured air-relative velocity instead of C_bn (v - w_hat): the wind they get is the wind
+triangle v - C_nb V(alpha, beta), which gives exactly that air velocity in body axes. A
+sample whose air data is missing, non-finite or outside the aircraft model's validity
+(AIR_DATA_VALIDITY) falls back to the filtered wind; each sample says which it flew
+(wind_source).
+
 Frames: the model gives dv/dt of v = (NED ground velocity, body rates), so the linear rows
 are filtered in NED. The output expresses them in body axes (x forward, y right, z down),
 rotating y, a, a_hat and S's rows by the newest attitude: the same rotation on both sides
@@ -34,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 from uav_sim.channels import STATE_CHANNELS
 from uav_sim.filters import LowPass
-from uav_sim.frames import ned_to_body
+from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
 
 # phi(state (14,), controls (7,), filtered NED wind (3,)) -> (6,) [dv_ned/dt m/s^2, dpqr/dt rad/s^2]
 Prediction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -67,6 +74,22 @@ ROW_NEEDS: tuple[frozenset[str], ...] = (
 )
 
 
+# Where the models' wind came from (Residuals.WIND_FILTERED, Residuals.WIND_AIR_DATA).
+WIND_FILTERED, WIND_AIR_DATA = 0, 1
+# Air data the models can fly: airspeed [m/s], alpha and beta [rad] within the range of the
+# Aerosonde data (AeroSim sample model: Va 15-50 m/s, alpha -0.1..0.3 rad, |beta| <= 0.5
+# rad). Outside it (a blocked pitot, a stuck vane) the sample falls back.
+AIR_DATA_VALIDITY = ((15.0, 50.0), (-0.1, 0.3), (-0.5, 0.5))
+
+
+def air_data_usable(air_data: np.ndarray | None) -> bool:
+    """Whether a measured (airspeed, alpha, beta) is finite and within AIR_DATA_VALIDITY."""
+    if air_data is None or not np.all(np.isfinite(air_data)):
+        return False
+    return all(low <= value <= high
+               for value, (low, high) in zip(air_data, AIR_DATA_VALIDITY, strict=True))
+
+
 # Columns of S beyond the faults: the error of the filtered wind estimate, w - w_hat [m/s].
 # Turbulence reaches the residuals through it: y ~= S_f f + S_w (w - w_hat), so an
 # estimator may carry it as a nuisance parameter.
@@ -93,6 +116,7 @@ class ResidualSample:
     predicted: np.ndarray     # (6,) a_hat
     sensitivity: np.ndarray   # (6, columns) S [row unit per % of fault, or per m/s of wind]
     valid: np.ndarray         # (6,) bool: the row's needed channels were all present
+    wind_source: int          # WIND_AIR_DATA or WIND_FILTERED: what the newest sample flew
 
 
 class ResidualGenerator:
@@ -152,6 +176,7 @@ class ResidualGenerator:
         self.raw_sensitivity: np.ndarray | None = None
         self.next_sensitivity_s = -math.inf
         self.row_invalid_until_s = np.full(6, math.inf)
+        self.wind_source = WIND_FILTERED
         self.latest: ResidualSample | None = None
 
     def _prediction(self, state: np.ndarray, controls: np.ndarray, wind: np.ndarray,
@@ -180,9 +205,12 @@ class ResidualGenerator:
         return self.row_invalid_until_s <= time_s
 
     def update(self, time_s: float, state: np.ndarray, controls: np.ndarray,
-               wind_ned_mps: np.ndarray) -> ResidualSample | None:
+               wind_ned_mps: np.ndarray,
+               air_data: np.ndarray | None = None) -> ResidualSample | None:
         """Process one sensor sample; the residuals at time_s, or None before any is formed.
 
+        air_data (3,): measured true airspeed [m/s], alpha, beta [rad], or None; when usable
+        (air_data_usable) the models fly it instead of the filtered wind wind_ned_mps.
         Raises ValueError for a time that does not increase (call reset() first).
         """
         if self.last_time_s is not None and time_s <= self.last_time_s:
@@ -198,9 +226,11 @@ class ResidualGenerator:
         if not np.all(np.isfinite(self.held_state)) or len(self.held_inputs) < 2:
             return None  # some input never seen yet: nothing can be predicted
         state = self.held_state
-        prediction = self._prediction(
-            state, self.held_inputs["controls"], self.held_inputs["wind"], time_s
-        )
+        wind, self.wind_source = self.held_inputs["wind"], WIND_FILTERED
+        if air_data_usable(air_data):
+            wind = wind_triangle_ned_mps(state[VELOCITY[:3]], *state[ATTITUDE], air_data)
+            self.wind_source = WIND_AIR_DATA
+        prediction = self._prediction(state, self.held_inputs["controls"], wind, time_s)
         velocity = state[VELOCITY]
         valid = self._update_row_validity(missing, time_s)
         if self.last_time_s is not None:
@@ -227,4 +257,5 @@ class ResidualGenerator:
             predicted=predicted,
             sensitivity=predicted_and_s[:, 1:].copy(),
             valid=valid.copy(),
+            wind_source=self.wind_source,
         )
