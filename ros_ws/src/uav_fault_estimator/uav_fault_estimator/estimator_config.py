@@ -11,7 +11,8 @@ import numpy as np
 from uav_sim.channels import PAPER_FAULT_NAMES
 
 from uav_fault_estimator.fault_models import SCALE_PARAMETER, FaultModel, make_model
-from uav_fault_estimator.residuals import WIND_ERROR_NAMES
+from uav_fault_estimator.noise_model import NoiseCalibration, load_noise_calibration
+from uav_fault_estimator.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
 
 ARRIVAL_CENTRES = ("filter", "previous_window")
 
@@ -119,10 +120,19 @@ class EstimatorConfig:
         return np.array([fault.prior_pct for fault in self.faults])
 
 
+def noise_calibration(parameters: Mapping[str, Any]) -> NoiseCalibration:
+    """The noise calibration mhe_node's parameters name ("" for the shipped one)."""
+    if not parameters["noise_variance_factor"] > 0:
+        raise ValueError(f"noise_variance_factor must be positive, got "
+                         f"{parameters['noise_variance_factor']}")
+    return load_noise_calibration(parameters["noise_calibration_file"])
+
+
 def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> EstimatorConfig:
     """The configuration from mhe_node's flat parameters (config/mhe_node.yaml), for
     `channels` residual channels; ValueError naming the first wrong entry. The estimated
-    columns are the faults, then the wind-estimate errors when estimate_wind_errors."""
+    columns are the faults, then the wind-estimate errors when estimate_wind_errors. Q is
+    the noise calibration's for air data (per sample the node may pass another suite's)."""
     names = list(parameters["fault_names"])
     per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
                  "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2",
@@ -154,7 +164,8 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
         floor += [0.0] * len(WIND_ERROR_NAMES)
     config = EstimatorConfig(
         horizon=parameters["horizon"],
-        q_diag=tuple(parameters["residual_variances"]),
+        q_diag=tuple(noise_calibration(parameters).q_diag(WIND_AIR_DATA,
+                                                          parameters["noise_variance_factor"])),
         r_diag_pct2=tuple(handover),
         faults=faults,
         solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
@@ -164,6 +175,6 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
         arrival_centre=parameters["arrival_centre"],
     )
     if len(config.q_diag) != channels:
-        raise ValueError(f"residual_variances needs {channels} entries")
+        raise ValueError(f"the noise calibration needs {channels} channels")
     config.validate()
     return config

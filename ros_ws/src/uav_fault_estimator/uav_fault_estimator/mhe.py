@@ -68,12 +68,15 @@ class MovingHorizonEstimator:
         self._window_pct = np.tile(config.prior_pct, (n, 1))
 
     def update(
-        self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None
+        self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None,
+        noise_variances: np.ndarray | None = None,
     ) -> EstimateResult:
         """Add one sample and re-estimate.
 
         Inputs: y (m,) residuals; s (m, p) signatures [residual unit / %]; valid (m,)
-        booleans, False for a channel lost at this sample (left out of the fit).
+        booleans, False for a channel lost at this sample (left out of the fit);
+        noise_variances (m,): this sample's Q when not the configured one (another sensor
+        suite: noise_model.py).
         Returns the EstimateResult: WAITING (values = prior) while the window holds no
         valid residual row; INVALID_DATA for non-finite or misshapen data on valid
         channels. A window not yet full is solved with its empty samples weighted 0.
@@ -83,7 +86,8 @@ class MovingHorizonEstimator:
         # the new first point.
         self.arrival.absorb(self._y[0], self._s[0], self._weight[0])
         self.arrival.predict()
-        sample_ok = self._push_sample(y, s, valid)
+        q_inv = self._q_inv if noise_variances is None else 1.0 / np.asarray(noise_variances)
+        sample_ok = self._push_sample(y, s, valid, q_inv)
         self._shift_guess()
         if not sample_ok:
             return self._result(SolveStatus.INVALID_DATA, None, start)
@@ -99,7 +103,8 @@ class MovingHorizonEstimator:
             self._window_pct = outcome.x[self.problem.f_index]
         return self._result(outcome.status, outcome, start)
 
-    def _push_sample(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None) -> bool:
+    def _push_sample(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None,
+                     q_inv: np.ndarray) -> bool:
         """Append the sample to the window, invalid or non-finite channels weighted 0.
 
         Returns False when the sample is unusable (wrong shape, non-finite on a channel
@@ -119,7 +124,7 @@ class MovingHorizonEstimator:
         finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
         self._y[-1] = np.where(finite, y, 0.0)
         self._s[-1] = np.where(finite[:, None], s, 0.0)
-        self._weight[-1] = np.where(keep & finite, self._q_inv, 0.0)
+        self._weight[-1] = np.where(keep & finite, q_inv, 0.0)
         return bool(np.all(finite[keep]))
 
     def _shift_guess(self) -> None:

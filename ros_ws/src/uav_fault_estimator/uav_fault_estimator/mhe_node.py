@@ -23,7 +23,7 @@ from uav_sim.node_tools import (
     run_node,
 )
 
-from uav_fault_estimator.estimator_config import config_from_parameters
+from uav_fault_estimator.estimator_config import config_from_parameters, noise_calibration
 from uav_fault_estimator.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.proxqp_solver import SolveStatus
 
@@ -37,7 +37,10 @@ PARAMETERS = {
     "upper_bounds_pct": "per fault: upper bound on f [%]",
     "prior_pct": "per fault: f before any data [%]",
     "horizon": "N: residual samples in the moving window",
-    "residual_variances": "Q: noise variance of each of the 6 residual channels",
+    "noise_calibration_file": "residual noise per sensor suite (scripts/calibrate_estimator.py);"
+    " empty: the shipped config/residual_noise.yaml",
+    "noise_variance_factor": "Q = this factor times the calibrated variances (correlated "
+    "noise: fewer independent samples than the window holds)",
     "handover_variances_pct2": "R of eq. 17: per fault, the arrival cost's variance before any "
     "data [%^2]",
     "arrival_inflation": "factor (>= 1) on the arrival cost's covariance every sample",
@@ -63,6 +66,7 @@ class MheNode(Node):
             self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS
         )
         self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
+        self.noise = noise_calibration(self.parameters)
         self.names = list(self.parameters["fault_names"])  # published
         self.estimated = [fault.name for fault in self.config.faults]  # faults, then nuisance
         self.estimator = MovingHorizonEstimator(self.config)
@@ -88,8 +92,8 @@ class MheNode(Node):
             return
         sensitivity = np.array(message.sensitivity).reshape(Residuals.CHANNELS, -1)
         result = self.estimator.update(
-            np.array(message.residual), sensitivity[:, columns], np.array(message.valid)
-        )
+            np.array(message.residual), sensitivity[:, columns], np.array(message.valid),
+            self.noise.q_diag(message.wind_source, self.parameters["noise_variance_factor"]))
         self.window_stamps_s.append(time_s)
         self.publisher.publish(self.estimate_message(time_s, result))
         self.count(result)

@@ -6,7 +6,7 @@ benchmarks; metrics.py turns the result into metrics.json's figures."""
 from __future__ import annotations
 
 import dataclasses
-import itertools
+import functools
 import math
 import multiprocessing
 import os
@@ -20,7 +20,7 @@ from uav_sim.paths import default_parameters
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
-from uav_fault_estimator.estimator_config import config_from_parameters
+from uav_fault_estimator.estimator_config import config_from_parameters, noise_calibration
 from uav_fault_estimator.metrics import EstimateSeries, SeededSeries
 from uav_fault_estimator.mhe import MovingHorizonEstimator
 from uav_fault_estimator.prediction import residual_generator
@@ -51,6 +51,7 @@ def fly_and_estimate(
            **(mhe_overrides or {})}
     generator = residual_generator(residual)
     estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
+    noise = noise_calibration(mhe)
     published = len(mhe["fault_names"])
     simulation = Simulation(scenario)
     period_s = float(residual["update_period_s"])
@@ -62,7 +63,9 @@ def fly_and_estimate(
                                   None if true_wind else sample.air_data)
         on_grid = abs(sample.time_s / period_s - round(sample.time_s / period_s)) < 1e-9
         if result is not None and on_grid:
-            estimate = estimator.update(result.residual, result.sensitivity, result.valid)
+            estimate = estimator.update(
+                result.residual, result.sensitivity, result.valid,
+                noise.q_diag(result.wind_source, mhe["noise_variance_factor"]))
             stamps.append(sample.time_s)
             values.append(estimate.fault_pct[:published])
             statuses.append(int(estimate.status))
@@ -100,12 +103,36 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> tuple[np.ndarray, ...]:
 
 def fly_on_grid_each(scenarios: Sequence[Scenario],
                      period_s: float) -> list[tuple[np.ndarray, ...]]:
-    """fly_on_grid of every scenario, one process per core: the flights are independent,
-    so the results are those of flying them one after the other. Spawned, not forked:
-    the caller may be a ROS process with threads of its own."""
+    """fly_on_grid of every scenario, one process per core (each_in_processes)."""
+    return each_in_processes(functools.partial(fly_on_grid, period_s=period_s), scenarios)
+
+
+def fault_free_residuals(scenario: Scenario) -> np.ndarray:
+    """The residuals (K, 6) residual_node would publish for the scenario with its default
+    parameters, on the update grid, where every row is valid."""
+    parameters = default_parameters(PACKAGE, "residual_node.yaml")
+    generator = residual_generator(parameters)
+    period_s = float(parameters["update_period_s"])
+    simulation = Simulation(scenario)
+    sample, rows = simulation.sample(), []
+    while True:
+        result = generator.update(sample.time_s, sample.state, sample.controls,
+                                  sample.wind_filtered_ned_mps, sample.air_data)
+        on_grid = abs(sample.time_s / period_s - round(sample.time_s / period_s)) < 1e-9
+        if result is not None and on_grid and result.valid.all():
+            rows.append(result.residual)
+        if simulation.finished:
+            return np.array(rows)
+        sample = simulation.step()
+
+
+def each_in_processes(function, items: Sequence) -> list:
+    """function(item) for every item, one process per core: for independent flights, the
+    results of running them one after the other. Spawned, not forked: the caller may be a
+    ROS process with threads of its own."""
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=os.cpu_count(), mp_context=context) as pool:
-        return list(pool.map(fly_on_grid, scenarios, itertools.repeat(period_s)))
+        return list(pool.map(function, items))
 
 
 def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,

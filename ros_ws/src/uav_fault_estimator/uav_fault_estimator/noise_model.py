@@ -1,0 +1,82 @@
+"""The residual noise model of the estimator: Q per sensor suite, calibrated on fault-free
+flights (scripts/calibrate_estimator.py writes config/residual_noise.yaml).
+
+What the residuals carry without a fault is turbulence the models do not see plus sensor
+noise, both through F_a, so it depends on where the models' wind came from: the air data
+(Residuals.WIND_AIR_DATA) or the filtered wind (WIND_FILTERED). The calibration holds, per
+suite, each residual channel's variance and one-step (0.5 s) correlation over the flights;
+the estimator's Q is the variance times `variance_factor`, one factor for both suites. The
+correlation after F_a (about exp(-0.5 / 4) = 0.88) means fewer independent samples than the
+window holds; the factor stands for that (the AR(1) white-equivalent (1 + rho)/(1 - rho) =
+16 would be the factor for a constant fault; the shipped 4 was tuned on the default
+scenario, README). No ROS here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+from ament_index_python.packages import get_package_share_directory
+
+from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
+
+SUITES = {WIND_AIR_DATA: "air_data", WIND_FILTERED: "filtered_wind"}
+CALIBRATION_FILE = "residual_noise.yaml"
+
+
+@dataclass(frozen=True)
+class NoiseCalibration:
+    """Per suite name (SUITES): variances (6,) [residual unit²] and one-step correlations
+    (6,) of the fault-free residuals."""
+
+    variances: dict[str, np.ndarray]
+    correlations: dict[str, np.ndarray]
+
+    def q_diag(self, wind_source: int, variance_factor: float) -> np.ndarray:
+        """Q (6,) for residuals whose models flew wind_source."""
+        return variance_factor * self.variances[SUITES[wind_source]]
+
+    def to_dict(self) -> dict:
+        return {suite: {"channels": list(RESIDUAL_CHANNELS),
+                        "variances": [float(v) for v in self.variances[suite]],
+                        "one_step_correlations": [float(c) for c in self.correlations[suite]]}
+                for suite in SUITES.values()}
+
+
+def fit_noise(residuals: dict[str, list[np.ndarray]]) -> NoiseCalibration:
+    """The calibration from, per suite name, a list of flights' residual sequences (K, 6):
+    variances about zero and one-step correlations pooled over the flights."""
+    variances, correlations = {}, {}
+    for suite, flights in residuals.items():
+        squares = np.concatenate([flight**2 for flight in flights])
+        lagged = np.concatenate([flight[1:] * flight[:-1] for flight in flights])
+        variances[suite] = squares.mean(axis=0)
+        correlations[suite] = lagged.mean(axis=0) / variances[suite]
+    return NoiseCalibration(variances, correlations)
+
+
+def shipped_noise_path() -> Path:
+    """The package's config/residual_noise.yaml."""
+    return Path(get_package_share_directory("uav_fault_estimator")) / "config" / CALIBRATION_FILE
+
+
+def load_noise_calibration(path: str | Path = "") -> NoiseCalibration:
+    """Read a calibration file ("" for the shipped one); ValueError naming the file and
+    what is wrong."""
+    path = Path(path) if path else shipped_noise_path()
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+        variances = {suite: np.array(data[suite]["variances"], dtype=float)
+                     for suite in SUITES.values()}
+        correlations = {suite: np.array(data[suite]["one_step_correlations"], dtype=float)
+                        for suite in SUITES.values()}
+    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"noise calibration {path}: cannot be read ({error})") from None
+    for suite, values in variances.items():
+        if values.shape != (len(RESIDUAL_CHANNELS),) or not np.all(values > 0):
+            raise ValueError(f"noise calibration {path}: {suite} needs "
+                             f"{len(RESIDUAL_CHANNELS)} positive variances")
+    return NoiseCalibration(variances, correlations)

@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""Calibrate the estimator's residual noise (Q) from fault-free flights, per sensor suite.
+
+    python scripts/calibrate_estimator.py [--flights 4] [--out FILE]
+
+Flies the fault_free scenario (the default flight in its turbulence from the wind, noisy
+sensors) with seeds from 301 and background winds of 5-6.25 m/s towards directions 360/N
+degrees apart, once with air data on board and once without (the paper's filtered wind
+only), through residual_node's residual generator with its default parameters, and writes
+each suite's per-channel variances and one-step correlations of the residuals
+(noise_model.py) to the YAML that mhe_node reads (default: the package's
+config/residual_noise.yaml). Other seeds than the detector's (101-112) and its held-out
+flights (201-212), and than the default scenario's 7 that the estimator is judged on.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import yaml
+from uav_fault_estimator.noise_model import CALIBRATION_FILE, SUITES, fit_noise
+from uav_fault_estimator.offline import each_in_processes, fault_free_flights, fault_free_residuals
+from uav_sim.scenario import SensorSuite
+
+PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
+FIRST_SEED = 301
+AIR_DATA = {"air_data": True, "filtered_wind": False}  # suite name -> air data on board
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--flights", type=int, default=4)
+    parser.add_argument("--out", type=Path, default=PACKAGE / "config" / CALIBRATION_FILE)
+    arguments = parser.parse_args()
+    started = time.monotonic()
+    base = fault_free_flights(arguments.flights, FIRST_SEED)
+    scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=AIR_DATA[suite]))
+                 for suite in SUITES.values() for s in base]
+    residuals = each_in_processes(fault_free_residuals, scenarios)
+    count = len(base)
+    calibration = fit_noise({suite: residuals[k * count:(k + 1) * count]
+                             for k, suite in enumerate(SUITES.values())})
+    header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
+              f"flights of '{base[0].name}' per sensor suite ({base[0].duration_s:g} s each,\n"
+              f"# {base[0].wind.turbulence} turbulence), seeds "
+              f"{', '.join(str(s.seed) for s in base)}; winds north/east [m/s] "
+              + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in base)
+              + ".\n# Valid for residual_node's default parameters.\n")
+    arguments.out.write_text(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
+    print(f"calibrated on {count} flights per suite in {time.monotonic() - started:.1f} s: "
+          f"{arguments.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
