@@ -8,7 +8,6 @@ import subprocess
 import numpy as np
 import pytest
 from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.residuals import WIND_ERROR_NAMES
 from uav_fault_msgs.msg import Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.messages import stamp_seconds
@@ -20,6 +19,7 @@ PERIOD_S = 0.5
 RECOVERY_S = 1.0
 FIRST_S, SECOND_S = 8.0, 4.0
 PITCH_RATE_DROPOUT = {"channel": "pitch_rate", "start_s": 2.0, "end_s": 3.0}
+AIRSPEED_DROPOUT = {"channel": "airspeed", "start_s": 5.0, "end_s": 6.0}
 ANGULAR_Y = 4  # the residual row that needs the pitch rate
 
 
@@ -43,7 +43,8 @@ def test_residuals_every_half_second_with_dropout_and_restart(
         "residual_node",
     )
     assert graph.wait_for_publishers("/residuals", 1, timeout_s=30)
-    fly(start_process, short_scenario(FIRST_S, sensor_dropouts=[PITCH_RATE_DROPOUT]), "first")
+    fly(start_process, short_scenario(FIRST_S, sensor_dropouts=[PITCH_RATE_DROPOUT,
+                                                                    AIRSPEED_DROPOUT]), "first")
     first = round(FIRST_S / PERIOD_S)
     graph.spin(30.0, until=lambda: len(received) >= first)
     fly(start_process, short_scenario(SECOND_S), "restarted")
@@ -56,7 +57,7 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     assert stamps == pytest.approx(
         [PERIOD_S * k for k in range(1, first + 1)]
         + [PERIOD_S * k for k in range(1, expected - first + 1)], abs=1e-9)
-    columns = [*PAPER_FAULT_NAMES, *WIND_ERROR_NAMES]  # the defaults
+    columns = list(PAPER_FAULT_NAMES)  # the defaults
     for message in received:
         assert list(message.fault_names) == columns
         sensitivity = np.array(message.sensitivity).reshape(6, -1)
@@ -68,6 +69,13 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     assert valid[1.5] == [True] * 6                   # settled before the dropout
     assert valid[2.5] == valid[3.5] == row_only        # missing, then settling for 1 s
     assert valid[4.5] == [True] * 6
+    # the models fly the air data, and the filtered wind while the airspeed is missing
+    sources = {stamp: message.wind_source
+               for stamp, message in zip(stamps[:first], received[:first], strict=True)}
+    filtered = [stamp for stamp, source in sources.items() if source == Residuals.WIND_FILTERED]
+    assert filtered == [5.0, 5.5], sources
+    assert all(source == Residuals.WIND_AIR_DATA for source in sources.values()
+               if source != Residuals.WIND_FILTERED)
     log = residual_node.output()
     assert log.count("the source restarted, filters reset") == 1, log
     assert residual_node.running()

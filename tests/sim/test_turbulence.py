@@ -11,23 +11,23 @@ and on a long run.
 
 from __future__ import annotations
 
-import dataclasses
+import functools
 import itertools
 import math
 
 import numpy as np
 import pytest
+from helpers.flights import turbulence_met
 from scipy.linalg import solve_continuous_lyapunov
 from scipy.signal import welch
+from uav_fault_estimator.offline import each_in_processes
 from uav_sim.aircraft import M_PER_FT
-from uav_sim.simulation import Simulation
 from uav_sim.turbulence import (
     VonKarmanTurbulence,
     milspec_scales,
     shaping_filters,
     von_karman_psd,
 )
-from uav_sim.wind import GUST_RATE_RADPS
 
 AIRSPEED_MPS = 25.0
 WINGSPAN_M = 2.8956
@@ -118,35 +118,6 @@ FLIGHTS = [  # (altitude [m], wind speed [m/s], seed): two altitudes, two winds,
     (250.0, 5.0, 21), (250.0, 8.0, 22), (600.0, 5.0, 23), (600.0, 8.0, 24)]
 
 
-def turbulence_met(default_scenario, altitude_m: float, wind_mps: float, seed: int):
-    """300 s of the default loop in from_wind turbulence: the gusts the aircraft met (true
-    wind less the background) in turbulence axes (u along the wind, v right, w down), every
-    20 Hz sample after the first; and the body-axis gust rates [rad/s] with the largest
-    difference between the rates the aircraft's rate derivatives see and body rate less gust."""
-    direction = math.atan2(3.0, 4.0)
-    wind = dataclasses.replace(
-        default_scenario.wind, north_mps=wind_mps * math.cos(direction),
-        east_mps=wind_mps * math.sin(direction), turbulence="from_wind")
-    scenario = dataclasses.replace(
-        default_scenario, seed=seed, wind=wind, faults=(),
-        initial=dataclasses.replace(default_scenario.initial, altitude_m=altitude_m))
-    simulation = Simulation(scenario)
-    background = np.array([wind.north_mps, wind.east_mps, wind.down_mps])
-    gusts, rates, rate_mismatch = [], [], 0.0
-    while not simulation.finished:
-        gusts.append(simulation.step().wind_ned_mps - background)
-        fdm = simulation.fdm
-        rates.append([fdm[name] for name in GUST_RATE_RADPS])
-        for axis, rate in zip("pqr", rates[-1], strict=True):
-            rate_mismatch = max(rate_mismatch, abs(
-                fdm[f"aero/{axis}-rate-rad_sec"] - fdm[f"velocities/{axis}-aero-rad_sec"]
-                + rate))
-    north, east, down = np.array(gusts).T
-    c, s = math.cos(direction), math.sin(direction)
-    uvw = np.column_stack([c * north + s * east, -s * north + c * east, down])
-    return uvw, np.array(rates), rate_mismatch
-
-
 @pytest.mark.timeout(300)
 def test_flights_meet_the_rule(default_scenario):
     """Four 300 s flights: each axis's standard deviation, pooled over the flights as a
@@ -154,9 +125,9 @@ def test_flights_meet_the_rule(default_scenario):
     spectrum within 3 dB of the von Karman form over 0.05-2 Hz; the rotational gusts reach
     the rate derivatives."""
     ratios_squared = []
-    for altitude_m, wind_mps, seed in FLIGHTS:
-        gusts, rates, rate_mismatch = turbulence_met(default_scenario, altitude_m, wind_mps,
-                                                     seed)
+    flown = each_in_processes(functools.partial(turbulence_met, default_scenario), FLIGHTS)
+    for (altitude_m, wind_mps, seed), (gusts, rates, rate_mismatch) in zip(FLIGHTS, flown,
+                                                                            strict=True):
         scales = milspec_scales(wind_mps, altitude_m)
         ratio = np.sqrt((gusts**2).mean(axis=0)) / np.array(scales.sigma_mps)
         errors = band_errors_db(gusts, scales, segment_s=60.0)
