@@ -109,9 +109,10 @@ def fly_on_grid_each(scenarios: Sequence[Scenario],
 
 def fault_free_residuals(scenario: Scenario) -> np.ndarray:
     """The residuals (K, 6) residual_node would publish for the scenario with its default
-    parameters, on the update grid, where every row is valid."""
+    parameters, on the update grid, where every row is valid. (y does not depend on S:
+    the sensitivities' model copies are left out.)"""
     parameters = default_parameters(PACKAGE, "residual_node.yaml")
-    generator = residual_generator(parameters)
+    generator = residual_generator({**parameters, "fault_names": []})
     period_s = float(parameters["update_period_s"])
     simulation = Simulation(scenario)
     sample, rows = simulation.sample(), []
