@@ -25,7 +25,7 @@ from pathlib import Path
 
 import yaml
 from ament_index_python.packages import get_package_share_directory
-from uav_fault_estimator.offline import fault_free_flights, fly_on_grid_each
+from uav_fault_estimator.offline import describe_flights, fault_free_flights, fly_on_grid_each
 from uav_fault_estimator.recording import flight_from_recording, project_typestore
 from uav_fault_estimator.self_tuning import calibrate
 from uav_sim.paths import default_parameters
@@ -41,11 +41,7 @@ def simulated(count: int) -> tuple[list, str]:
     scenarios = fault_free_flights(count, FIRST_SEED)
     flights = [flight[:3] for flight in fly_on_grid_each(scenarios, SAMPLE_PERIOD_S)]
     header = (f"# Written by scripts/calibrate_detector.py: {len(scenarios)} fault-free flights "
-              f"of '{scenarios[0].name}' ({scenarios[0].duration_s:g} s each, "
-              f"{scenarios[0].wind.turbulence} turbulence),\n# seeds "
-              f"{', '.join(str(s.seed) for s in scenarios)}; winds north/east [m/s] "
-              + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios)
-              + ".\n")
+              f"of\n# {describe_flights(scenarios)}.\n")
     return flights, header
 
 

@@ -23,7 +23,12 @@ from pathlib import Path
 
 import yaml
 from uav_fault_estimator.noise_model import CALIBRATION_FILE, SUITES, fit_noise
-from uav_fault_estimator.offline import each_in_processes, fault_free_flights, fault_free_residuals
+from uav_fault_estimator.offline import (
+    describe_flights,
+    each_in_processes,
+    fault_free_flights,
+    fault_free_residuals,
+)
 from uav_sim.scenario import SensorSuite
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
@@ -45,11 +50,8 @@ def main() -> int:
     calibration = fit_noise({suite: residuals[k * count:(k + 1) * count]
                              for k, suite in enumerate(SUITES.values())})
     header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
-              f"flights of '{base[0].name}' per sensor suite ({base[0].duration_s:g} s each,\n"
-              f"# {base[0].wind.turbulence} turbulence), seeds "
-              f"{', '.join(str(s.seed) for s in base)}; winds north/east [m/s] "
-              + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in base)
-              + ".\n# Valid for residual_node's default parameters.\n")
+              f"flights per sensor suite of\n# {describe_flights(base)}.\n"
+              "# Valid for residual_node's default parameters.\n")
     arguments.out.write_text(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
     print(f"calibrated on {count} flights per suite in {time.monotonic() - started:.1f} s: "
           f"{arguments.out}")

@@ -146,6 +146,15 @@ def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,
     return dataclasses.replace(scenario, seed=seed, wind=wind)
 
 
+def describe_flights(scenarios: Sequence[Scenario]) -> str:
+    """One line for a calibration file's header: which flights of which scenario."""
+    first = scenarios[0]
+    return (f"'{first.name}' ({first.duration_s:g} s each, {first.wind.turbulence} "
+            f"turbulence), seeds {', '.join(str(s.seed) for s in scenarios)}; winds "
+            "north/east [m/s] "
+            + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios))
+
+
 def fault_free_flights(count: int, first_seed: int,
                        first_direction_deg: float = 0.0) -> list[Scenario]:
     """count variants of the shipped fault_free scenario (the default flight in its own
