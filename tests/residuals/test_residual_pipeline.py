@@ -120,13 +120,19 @@ def test_stamp_matcher_releases_complete_sets_in_stamp_order() -> None:
 @pytest.mark.timeout(30)
 def test_an_optional_stream_is_waited_for_only_while_it_is_published() -> None:
     published = {"air": True}
-    matcher = StampMatcher(("state",), ("air",), lambda stream: published[stream])
+    matcher = StampMatcher(("state",), ("air",), lambda stream: published[stream],
+                           optional_wait=2)
     assert matcher.add("state", 100, "s1") == []                      # air may still come
     assert matcher.add("air", 100, "a1") == [(100, {"state": "s1", "air": "a1"})]
     assert matcher.add("state", 200, "s2") == []
-    assert matcher.add("state", 300, "s3") == [(200, {"state": "s2"})]  # air of 200 lost
+    assert matcher.add("state", 300, "s3") == []                      # air of 200 late...
+    assert matcher.add("air", 300, "a3") == []
+    assert matcher.add("state", 400, "s4") == [(200, {"state": "s2"}),  # ...or lost
+                                               (300, {"state": "s3", "air": "a3"})]
+    assert matcher.add("air", 200, "a2") == [] and matcher.late_optional == 1
+    assert not matcher.is_backwards(450)
     published["air"] = False
-    assert matcher.add("state", 400, "s4") == [(300, {"state": "s3"}), (400, {"state": "s4"})]
+    assert matcher.add("state", 500, "s5") == [(400, {"state": "s4"}), (500, {"state": "s5"})]
     assert matcher.dropped_sets == 0
 
 

@@ -20,8 +20,8 @@ class MatchedStreams:
     """Subscribes each topic (reliable, keep-all) in the order given: sim_node's
     wait_for_subscribers counts `state` subscriptions, so list `state` last. Complete sets
     go to on_sample(time_s, arrays by topic) in stamp order, with the optional topics'
-    arrays where they came (waited for while the topic has a publisher, until the next
-    stamp's set is complete: StampMatcher); a stamp not newer than the
+    arrays where they came (waited for while the topic has a publisher, for up to
+    StampMatcher.optional_wait newer sets); a required stamp not newer than the
     last processed one (a restarted source) is warned of once (ending with restart_note:
     what on_restart does), resets the matcher and calls on_restart() first."""
 
@@ -53,7 +53,7 @@ class MatchedStreams:
 
     def receive(self, topic: str, message: Any) -> None:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
-        if self.matcher.is_backwards(stamp_ns):
+        if topic in self.matcher.streams and self.matcher.is_backwards(stamp_ns):
             self.node.get_logger().warning(
                 f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"
                 f" the source restarted, {self.restart_note}")
