@@ -22,7 +22,12 @@ import time
 from pathlib import Path
 
 import yaml
-from uav_fault_estimator.noise_model import CALIBRATION_FILE, SUITES, fit_noise
+from uav_fault_estimator.noise_model import (
+    AIR_DATA_ON_BOARD,
+    CALIBRATION_FILE,
+    SUITES,
+    fit_noise,
+)
 from uav_fault_estimator.offline import (
     describe_flights,
     each_in_processes,
@@ -33,7 +38,6 @@ from uav_sim.scenario import SensorSuite
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
 FIRST_SEED = 301
-AIR_DATA = {"air_data": True, "filtered_wind": False}  # suite name -> air data on board
 
 
 def main() -> int:
@@ -43,7 +47,7 @@ def main() -> int:
     arguments = parser.parse_args()
     started = time.monotonic()
     base = fault_free_flights(arguments.flights, FIRST_SEED)
-    scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=AIR_DATA[suite]))
+    scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=AIR_DATA_ON_BOARD[suite]))
                  for suite in SUITES.values() for s in base]
     residuals = each_in_processes(fault_free_residuals, scenarios)
     count = len(base)

@@ -7,11 +7,12 @@ import subprocess
 
 import numpy as np
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray
 from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_msgs.msg import Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.messages import stamp_seconds
-from uav_sim.node_tools import STREAM_QOS
+from uav_sim.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 
 pytestmark = pytest.mark.integration
 
@@ -21,6 +22,7 @@ FIRST_S, SECOND_S = 8.0, 4.0
 PITCH_RATE_DROPOUT = {"channel": "pitch_rate", "start_s": 2.0, "end_s": 3.0}
 AIRSPEED_DROPOUT = {"channel": "airspeed", "start_s": 5.0, "end_s": 6.0}
 ANGULAR_Y = 4  # the residual row that needs the pitch rate
+SENSOR_PERIOD_S = 0.05  # the simulator's samples (uav_sim config)
 
 
 def fly(start_process, scenario, name: str) -> None:
@@ -37,6 +39,8 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     short_scenario, graph, start_process
 ):
     received = graph.subscribe({"/residuals": Residuals}, STREAM_QOS)["/residuals"]
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
+                                  DIAGNOSTICS_QOS)["/diagnostics"]
     residual_node = start_process(
         ros2_run_argv("uav_fault_estimator", "residual_node",
                       ros_args=["-p", f"recovery_s:={RECOVERY_S}"]),
@@ -47,6 +51,11 @@ def test_residuals_every_half_second_with_dropout_and_restart(
                                                                     AIRSPEED_DROPOUT]), "first")
     first = round(FIRST_S / PERIOD_S)
     graph.spin(30.0, until=lambda: len(received) >= first)
+    # the fallback is counted on /diagnostics: every sensor sample of the airspeed dropout
+    fallback = round((AIRSPEED_DROPOUT["end_s"] - AIRSPEED_DROPOUT["start_s"])
+                     / SENSOR_PERIOD_S)
+    graph.spin(5.0, until=lambda: filtered_wind_samples(diagnostics) == fallback)
+    assert filtered_wind_samples(diagnostics) == fallback
     fly(start_process, short_scenario(SECOND_S), "restarted")
     expected = first + round(SECOND_S / PERIOD_S)
     graph.spin(30.0, until=lambda: len(received) >= expected)
@@ -79,6 +88,16 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     log = residual_node.output()
     assert log.count("the source restarted, filters reset") == 1, log
     assert residual_node.running()
+
+
+def filtered_wind_samples(diagnostics: list[DiagnosticArray]) -> int | None:
+    """residual_node's latest count of samples flown on the filtered wind (/diagnostics)."""
+    for array in reversed(diagnostics):
+        for status in array.status:
+            values = {value.key: value.value for value in status.values}
+            if status.name.endswith("residual_node") and "filtered_wind_samples" in values:
+                return int(values["filtered_wind_samples"])
+    return None
 
 
 @pytest.mark.timeout(60)

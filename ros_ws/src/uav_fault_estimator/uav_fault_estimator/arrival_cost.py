@@ -61,13 +61,16 @@ def increment_prior(terms: IncrementTerms) -> tuple[float, float]:
 
 
 class ArrivalCost:
-    """Gaussian summary N(mean, covariance) of the window's first point given the data before
-    the window: `absorb` a sample leaving the window, then `predict` one step.
+    """Gaussian summary N(mean, information⁻¹) of the window's first point given the data
+    before the window: `absorb` a sample leaving the window, then `predict` one step.
 
+    Kept in information form: absorbing a sample adds its data term (SᵀWS, SᵀWy: the
+    window's own stage_normal_equations of it, not recomputed) and the window's QP takes
+    the information as it is; the prediction is the one step that needs the covariance.
     Inputs: coefficients (p,) a of f(t+1) = a f(t) + gamma; increment_mode (p,) and
     increment_variance (p,) of gamma (increment_prior); mean (p,) and covariance (p, p) before
-    any data; inflation >= 1 multiplies the covariance every step; floor_variance (p,) is the
-    least variance each fault's prior keeps.
+    any data (positive definite); inflation >= 1 multiplies the covariance every step;
+    floor_variance (p,) is the least variance each fault's prior keeps.
     """
 
     def __init__(self, coefficients: np.ndarray, increment_mode: np.ndarray,
@@ -77,37 +80,35 @@ class ArrivalCost:
             raise ValueError(f"arrival cost inflation must be at least 1, got {inflation}")
         self.coefficients = np.asarray(coefficients, dtype=float)
         self.increment_mode = np.asarray(increment_mode, dtype=float)
-        self.increment_variance = np.asarray(increment_variance, dtype=float)
+        self.increment_variance = np.diag(np.asarray(increment_variance, dtype=float))
         self.mean = np.array(mean, dtype=float)
-        self.covariance = np.array(covariance, dtype=float)
+        self.information = np.linalg.inv(np.asarray(covariance, dtype=float))
         self.inflation = inflation
         self.floor_variance = (np.zeros(self.mean.size) if floor_variance is None
                                else np.asarray(floor_variance, dtype=float))
+        self._diagonal = np.diag_indices(self.mean.size)
 
-    def absorb(self, y: np.ndarray, s: np.ndarray, weight: np.ndarray) -> None:
-        """Measurement update with one residual sample y (m,) ≈ s (m, p) f + e, e of
-        inverse variances weight (m,) (0: a channel left out)."""
-        if not np.any(weight):
+    def absorb(self, gram: np.ndarray, linear: np.ndarray) -> None:
+        """Measurement update with one residual sample's data term: gram SᵀWS (p, p) [1/%²]
+        and linear SᵀWy (p,) [1/%] (qp_problem.stage_normal_equations; W = 0 on channels
+        left out)."""
+        if not gram.any():
             return
-        weighted = s.T * weight
-        information = np.linalg.inv(self.covariance) + weighted @ s
-        vector = np.linalg.solve(self.covariance, self.mean) + weighted @ y
-        self.covariance = np.linalg.inv(information)
-        self.covariance = 0.5 * (self.covariance + self.covariance.T)
-        self.mean = self.covariance @ vector
+        vector = self.information @ self.mean + linear
+        self.information = self.information + gram
+        self.mean = np.linalg.solve(self.information, vector)
 
     def predict(self) -> None:
         """Through one increment: mean a f + mode, covariance a P a + variance, inflated,
         floored."""
         a = self.coefficients
         self.mean = a * self.mean + self.increment_mode
-        covariance = (a[:, None] * self.covariance * a[None, :]
-                      + np.diag(self.increment_variance)) * self.inflation
-        diagonal = np.diag(covariance)
-        covariance[np.diag_indices_from(covariance)] = np.maximum(diagonal, self.floor_variance)
-        self.covariance = covariance
+        covariance = (a[:, None] * self.covariance * a + self.increment_variance) * self.inflation
+        covariance[self._diagonal] = np.maximum(covariance[self._diagonal], self.floor_variance)
+        self.information = np.linalg.inv(covariance)
+        self.information = 0.5 * (self.information + self.information.T)
 
     @property
-    def information(self) -> np.ndarray:
-        """Π⁻¹ (p, p): the arrival cost's Hessian."""
-        return np.linalg.inv(self.covariance)
+    def covariance(self) -> np.ndarray:
+        """Π (p, p) [%²]: the arrival cost's covariance."""
+        return np.linalg.inv(self.information)

@@ -55,9 +55,11 @@ class MovingHorizonEstimator:
             config.arrival_inflation, config.arrival_floor)
         self.solver = ProxQPSolver(self.problem, config.solver)
         self._q_inv = config.q_inv
-        self._y = np.zeros((n, m))
-        self._s = np.zeros((n, m, p))
-        self._weight = np.zeros((n, m))
+        self._channels = m
+        # Each sample's data term (stage_normal_equations), made once when it arrives.
+        self._gram = np.zeros((n, p, p))
+        self._linear = np.zeros((n, p))
+        self._has_data = np.zeros(n, dtype=bool)
         # The last good solution, shifted once per update: the warm start, and at stage 0
         # the previous window's estimate of the new window's first point (UAV eq. 17).
         # The window starts empty: its first point is N - 1 samples before the first one.
@@ -66,6 +68,7 @@ class MovingHorizonEstimator:
         self._y_dual = np.zeros(self.problem.b.size)
         self._z_dual = np.zeros(self.problem.l.size)
         self._window_pct = np.tile(config.prior_pct, (n, 1))
+        self._updates = 0
 
     def update(
         self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None,
@@ -82,22 +85,24 @@ class MovingHorizonEstimator:
         channels. A window not yet full is solved with its empty samples weighted 0.
         """
         start = time.perf_counter()
+        self._updates += 1
         # The oldest sample leaves the window: into the arrival cost, which then moves to
         # the new first point.
-        self.arrival.absorb(self._y[0], self._s[0], self._weight[0])
+        self.arrival.absorb(self._gram[0], self._linear[0])
         self.arrival.predict()
         q_inv = self._q_inv if noise_variances is None else 1.0 / np.asarray(noise_variances)
         sample_ok = self._push_sample(y, s, valid, q_inv)
         self._shift_guess()
         if not sample_ok:
             return self._result(SolveStatus.INVALID_DATA, None, start)
-        if not self._weight.any():  # no usable residual in the window yet
+        if not self._has_data.any():  # no usable residual in the window yet
             return self._result(SolveStatus.WAITING, None, start)
-        gram, linear = stage_normal_equations(self._y, self._s, self._weight)
         centre = (self.arrival.mean if self.config.arrival_centre == "filter"
                   else self._x[self.problem.f_index[0]])
-        self.problem.set_data(gram, linear, self.arrival.information, centre)
-        outcome = self.solver.solve(self._x, self._y_dual, self._z_dual)
+        self.problem.set_data(self._gram, self._linear, self.arrival.information, centre)
+        # the solver's preconditioner once more from the first full window (proxqp_solver)
+        outcome = self.solver.solve(self._x, self._y_dual, self._z_dual,
+                                    recondition=self._updates == self.config.horizon)
         if outcome.status is SolveStatus.SOLVED:
             self._x, self._y_dual, self._z_dual = outcome.x, outcome.y, outcome.z
             self._window_pct = outcome.x[self.problem.f_index]
@@ -105,26 +110,29 @@ class MovingHorizonEstimator:
 
     def _push_sample(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None,
                      q_inv: np.ndarray) -> bool:
-        """Append the sample to the window, invalid or non-finite channels weighted 0.
+        """Append the sample's data term to the window, invalid or non-finite channels
+        weighted 0.
 
         Returns False when the sample is unusable (wrong shape, non-finite on a channel
         marked valid); it then enters the window with all channels left out, so the next
         updates are not poisoned by it.
         """
-        m, p = self._s.shape[1:]
-        self._y[:-1] = self._y[1:]
-        self._s[:-1] = self._s[1:]
-        self._weight[:-1] = self._weight[1:]
+        m, p = self._channels, self._linear.shape[1]
+        for window in (self._gram, self._linear, self._has_data):
+            window[:-1] = window[1:]
+        self._gram[-1], self._linear[-1], self._has_data[-1] = 0.0, 0.0, False
         y = np.asarray(y, dtype=float)
         s = np.asarray(s, dtype=float)
         keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
         if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
-            self._weight[-1] = 0.0
             return False
         finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
-        self._y[-1] = np.where(finite, y, 0.0)
-        self._s[-1] = np.where(finite[:, None], s, 0.0)
-        self._weight[-1] = np.where(keep & finite, q_inv, 0.0)
+        weight = np.where(keep & finite, q_inv, 0.0)
+        gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],
+                                              np.where(finite[:, None], s, 0.0)[None],
+                                              weight[None])
+        self._gram[-1], self._linear[-1] = gram[0], linear[0]
+        self._has_data[-1] = bool(weight.any())
         return bool(np.all(finite[keep]))
 
     def _shift_guess(self) -> None:

@@ -24,6 +24,8 @@ from ament_index_python.packages import get_package_share_directory
 from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 
 SUITES = {WIND_AIR_DATA: "air_data", WIND_FILTERED: "filtered_wind"}
+# suite name -> whether the aircraft has air data on board (scenario sensors.air_data)
+AIR_DATA_ON_BOARD = {suite: source == WIND_AIR_DATA for source, suite in SUITES.items()}
 CALIBRATION_FILE = "residual_noise.yaml"
 
 
