@@ -106,7 +106,7 @@ def synthetic_sequence(samples: int, faults: int, seed: int) -> tuple[np.ndarray
 def synthetic_config(horizon: int, faults: int) -> EstimatorConfig:
     base = node_config()
     return dataclasses.replace(
-        base, horizon=horizon, r_diag_pct2=(1.0,) * faults,
+        base, horizon=horizon, r_diag_pct2=(1.0,) * faults, arrival_floor_pct2=None,
         faults=[dataclasses.replace(base.faults[0], name=f"fault_{k}") for k in range(faults)],
     )
 

@@ -68,7 +68,6 @@ class MovingHorizonEstimator:
         self._y_dual = np.zeros(self.problem.b.size)
         self._z_dual = np.zeros(self.problem.l.size)
         self._window_pct = np.tile(config.prior_pct, (n, 1))
-        self._updates = 0
 
     def update(
         self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None,
@@ -85,7 +84,6 @@ class MovingHorizonEstimator:
         channels. A window not yet full is solved with its empty samples weighted 0.
         """
         start = time.perf_counter()
-        self._updates += 1
         # The oldest sample leaves the window: into the arrival cost, which then moves to
         # the new first point.
         self.arrival.absorb(self._gram[0], self._linear[0])
@@ -100,9 +98,7 @@ class MovingHorizonEstimator:
         centre = (self.arrival.mean if self.config.arrival_centre == "filter"
                   else self._x[self.problem.f_index[0]])
         self.problem.set_data(self._gram, self._linear, self.arrival.information, centre)
-        # the solver's preconditioner once more from the first full window (proxqp_solver)
-        outcome = self.solver.solve(self._x, self._y_dual, self._z_dual,
-                                    recondition=self._updates == self.config.horizon)
+        outcome = self.solver.solve(self._x, self._y_dual, self._z_dual)
         if outcome.status is SolveStatus.SOLVED:
             self._x, self._y_dual, self._z_dual = outcome.x, outcome.y, outcome.z
             self._window_pct = outcome.x[self.problem.f_index]

@@ -14,10 +14,12 @@ Choices, each measured with scripts/bench_mhe.py (N = 50, p = 4, ProxSuite 0.8.0
   needed one and N = 200 cost 7.5 ms; at 1e-5 the median is linear in N (N = 25 ... 400:
   0.18 ... 2.2 ms) and only the rarer updates that still need one are slower (p99 7.5 ms
   at N = 200). Holding mu_in fixed (mu_min_in) was tried too: stalled updates, rejected.
-- Ruiz preconditioning computed at init and once more on the first full window (the
-  caller says when): from the near-empty first window it left 4.2 iterations per update on
-  the flown sequence, from the full one 3.7; every update, it costs more than it saves.
-  Two iterative refinement steps.
+- Ruiz preconditioning computed once at init; two iterative refinement steps. Recomputing
+  it once more on the first full window (update_preconditioner) cut the iterations from
+  4.2 to 3.7 per update on the flown sequence, but the graph's estimates then differed
+  from the offline chain's by up to 2.5e-5 % on the demo test's flight (without it they
+  agree to 1e-9; the cause inside ProxSuite not traced): not taken, so that a run can be
+  reproduced offline to the last digit.
 """
 
 from __future__ import annotations
@@ -85,25 +87,22 @@ class ProxQPSolver:
         self._scaled_h = problem.H.copy()
         self._initialised = False
 
-    def solve(self, x0: np.ndarray, y0: np.ndarray, z0: np.ndarray,
-              recondition: bool = False) -> SolveOutcome:
-        """Solve with the problem's current H and g from the guess (x0, y0, z0);
-        recondition: recompute the preconditioner from this H.
+    def solve(self, x0: np.ndarray, y0: np.ndarray, z0: np.ndarray) -> SolveOutcome:
+        """Solve with the problem's current H and g from the guess (x0, y0, z0).
 
         The objective goes to ProxSuite divided by the mean of H's diagonal, so that its
         data part is of order one whatever the residual units and noise levels: the
         absolute tolerances then mean the same on every problem, and the penalties of the
         augmented Lagrangian meet a Hessian of a known scale. The solution is unchanged;
         multipliers scale with the objective and are converted both ways. The
-        preconditioner is computed at the first call and when asked (same pattern, same scale).
+        preconditioner is computed at the first call only (same pattern, same scale).
         """
         p = self.problem
         scale = objective_scale(p.H)
         np.multiply(p.H.data, 1.0 / scale, out=self._scaled_h.data)
         scaled_g = p.g / scale
         if self._initialised:
-            self._qp.update(H=self._scaled_h, g=scaled_g, mu_in=WARM_START_MU_IN,
-                            update_preconditioner=recondition)
+            self._qp.update(H=self._scaled_h, g=scaled_g, mu_in=WARM_START_MU_IN)
         else:
             self._qp.init(
                 self._scaled_h,

@@ -120,6 +120,7 @@ class Simulation:
                 self.fdm, scenario.wind, scenario.initial.airspeed_mps,
                 scenario.initial.altitude_m, CONTROL_STEPS * JSBSIM_DT_S,
                 np.random.default_rng([scenario.seed, TURBULENCE_STREAM]))
+        self._faults_set: dict[str, float] | None = None  # what the aircraft holds now
         self._latest = self._sample()
 
     def _start(self) -> Trim:
@@ -163,7 +164,10 @@ class Simulation:
         for step in range(self.steps_per_sample):
             if step % CONTROL_STEPS == 0:
                 time_s = self.time_s + step * JSBSIM_DT_S
-                set_faults(fdm, self.scenario.faults_pct(time_s))
+                faults_pct = self.scenario.faults_pct(time_s)
+                if faults_pct != self._faults_set:  # held most of the flight: not rewritten
+                    set_faults(fdm, faults_pct)
+                    self._faults_set = faults_pct
                 if self.turbulence is not None:
                     set_gusts(fdm, *self.turbulence.step())
                 self._control(CONTROL_STEPS * JSBSIM_DT_S)
