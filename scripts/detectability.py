@@ -29,7 +29,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from uav_fault_estimator.metrics import fault_metrics
+from uav_fault_estimator.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.metrics import SETTLE_S, fault_metrics
 from uav_fault_estimator.noise_model import AIR_DATA_ON_BOARD
 from uav_fault_estimator.offline import each_in_processes, fly_and_estimate, wind_variant
 from uav_sim.channels import PAPER_FAULT_NAMES
@@ -37,9 +38,7 @@ from uav_sim.scenario import Scenario, SensorSuite, default_scenario_path, load_
 
 TURBULENCES = ("none", "from_wind", "light", "moderate")
 FIRST_SEED = 401        # other seeds than the calibrations' (101-112, 201-212, 301-304)
-SETTLE_S = 20.0         # metrics.json's settle_s
 START_S = 60.0          # after the start-up transient (also printed: where the largest are)
-THRESHOLD_PCT = 2.0     # metrics.json's detection_threshold_pct
 
 
 def flights(seeds: int) -> list[tuple[str, str, bool, Scenario]]:

@@ -13,12 +13,10 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
-from uav_fault_estimator.metrics import fault_metrics
+from uav_fault_estimator.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.metrics import SETTLE_S, fault_metrics
 from uav_fault_estimator.offline import fly_and_estimate
 from uav_sim.scenario import default_scenario_path, load_scenario
-
-SETTLE_S = 20.0
-THRESHOLD_PCT = 2.0
 
 
 @pytest.fixture(scope="module")

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+SETTLE_S = 20.0                 # metrics.json's settle_s: errors counted from here [s]
+DETECTION_THRESHOLD_PCT = 2.0   # metrics.json's detection_threshold_pct [%]
 STATUS_SOLVED = 0   # FaultEstimate.STATUS_SOLVED
 STATUS_WAITING = 4  # FaultEstimate.STATUS_WAITING: no data yet, not a failure
 

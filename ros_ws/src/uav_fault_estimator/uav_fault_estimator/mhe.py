@@ -43,7 +43,7 @@ class MovingHorizonEstimator:
     def __init__(self, config: EstimatorConfig) -> None:
         config.validate()
         self.config = config
-        n, m, p = config.horizon, len(config.q_diag), len(config.faults)
+        n, p = config.horizon, len(config.faults)
         models = [fault.build_model() for fault in config.faults]
         self.problem = WindowQP(
             n, models, [(fault.lower_pct, fault.upper_pct) for fault in config.faults])
@@ -55,7 +55,6 @@ class MovingHorizonEstimator:
             config.arrival_inflation, config.arrival_floor)
         self.solver = ProxQPSolver(self.problem, config.solver)
         self._q_inv = config.q_inv
-        self._channels = m
         # Each sample's data term (stage_normal_equations), made once when it arrives.
         self._gram = np.zeros((n, p, p))
         self._linear = np.zeros((n, p))
@@ -113,7 +112,7 @@ class MovingHorizonEstimator:
         marked valid); it then enters the window with all channels left out, so the next
         updates are not poisoned by it.
         """
-        m, p = self._channels, self._linear.shape[1]
+        m, p = self._q_inv.size, self._linear.shape[1]
         for window in (self._gram, self._linear, self._has_data):
             window[:-1] = window[1:]
         self._gram[-1], self._linear[-1], self._has_data[-1] = 0.0, 0.0, False

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from uav_fault_estimator.metrics import (
+    DETECTION_THRESHOLD_PCT,
+    SETTLE_S,
     AlarmSeries,
     EstimateSeries,
     SeededSeries,
@@ -82,7 +84,8 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
 
 
 def run_metrics(run: Run, scenario: str, update_period_s: float = 0.5,
-                settle_s: float = 20.0, threshold_pct: float = 2.0) -> dict:
+                settle_s: float = SETTLE_S,
+                threshold_pct: float = DETECTION_THRESHOLD_PCT) -> dict:
     """metrics.json as DESIGN.md lays it out."""
     faults, false_alarms = fault_metrics(run.estimates, run.seeded, settle_s, threshold_pct)
     return {

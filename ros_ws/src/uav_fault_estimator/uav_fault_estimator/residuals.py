@@ -238,7 +238,7 @@ class ResidualGenerator:
             observed_raw = (velocity - self.last_velocity) / dt_s
             predicted_mean = 0.5 * (prediction + self.last_prediction)
             if self.observed_filter.output is None:
-                # Start a from the model's acceleration, not from the first velocity
+                # Start F_a's a from the model's acceleration, not from the first velocity
                 # difference: with 0.05 m/s INS noise at 20 Hz one difference is off by
                 # about 1.4 m/s², which F_a would carry well past recovery_s (a drag-like
                 # x residual of 0.05 m/s² still at 15 s, i.e. a 13 % drag estimate).

@@ -71,7 +71,8 @@ def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
 
 @functools.cache
 def fault_property(name: str) -> str:
-    """The JSBSim property of a fault (formatted once: set_faults runs at 120 Hz)."""
+    """The JSBSim property of a fault, formatted once per name (set_faults is on the
+    control loop's path)."""
     return FAULT_PROPERTY.format(name=name)
 
 
