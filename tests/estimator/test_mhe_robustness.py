@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from uav_fault_estimator.estimator_config import EstimatorConfig, FaultConfig
 from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.proxqp_solver import SolveStatus
+from uav_fault_estimator.solve_status import SolveStatus
 
 NOISE_SD = np.array([0.05, 0.05, 0.05, 0.01, 0.01, 0.01])
 SAMPLES, FAULTS = 120, 2
@@ -81,3 +81,31 @@ def test_non_finite_data_and_a_failed_solve_keep_the_last_estimate_then_recover(
     # the NaN sample sits in the window with no weight: the estimates differ a little until
     # it leaves the window, then agree again
     assert result.fault_pct == pytest.approx(expected.fault_pct, abs=1e-3)
+
+
+@pytest.mark.timeout(60)
+def test_reset_starts_over_exactly_like_a_new_estimator():
+    """After reset (a restarted source) the estimator gives, to the last digit, what a new
+    one gives on the same data: nothing of the first flight is left in it."""
+    y, s, _ = sequence()
+    restarted = estimator()
+    for k in range(SAMPLES):
+        restarted.update(y[k], s[k])
+    restarted.reset()
+    new = estimator()
+    y2, s2, _ = sequence(seed=1)
+    for k in range(SAMPLES):
+        expected, result = new.update(y2[k], s2[k]), restarted.update(y2[k], s2[k])
+        assert result.status is expected.status
+        assert np.array_equal(result.window_pct, expected.window_pct)
+    assert result.columns(["fault_1", "fault_0"]) == [1, 0]
+
+
+def test_status_codes_are_the_messages():
+    """SolveStatus is the one home of the status codes: each equals FaultEstimate's constant
+    of its name, and the message has no other."""
+    from uav_fault_msgs.msg import FaultEstimate
+
+    constants = {name[len("STATUS_"):]: getattr(FaultEstimate, name)
+                 for name in dir(FaultEstimate) if name.startswith("STATUS_")}
+    assert constants == {status.name: status.value for status in SolveStatus}

@@ -14,7 +14,7 @@ import pytest
 from uav_fault_estimator.batch import BatchEstimator
 from uav_fault_estimator.estimator_config import EstimatorConfig, FaultConfig
 from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.proxqp_solver import SolveStatus
+from uav_fault_estimator.solve_status import SolveStatus
 
 DT_S = 0.1
 CYCLE_S = 15.0

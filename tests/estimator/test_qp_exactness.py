@@ -14,9 +14,10 @@ from uav_fault_estimator.fault_models import (
     RandomWalk,
     UniformIncrements,
 )
-from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveStatus
+from uav_fault_estimator.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
 from uav_fault_estimator.reference_qp import solve_reference
+from uav_fault_estimator.solve_status import SolveStatus
 
 TIGHT = SolverSettings(eps_abs=1e-9, eps_rel=0.0, max_iter=10_000)
 FREE = (-math.inf, math.inf)

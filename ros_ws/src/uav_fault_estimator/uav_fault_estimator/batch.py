@@ -14,8 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from uav_fault_estimator.estimator_config import EstimatorConfig
-from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveStatus
-from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
+from uav_fault_estimator.proxqp_solver import ProxQPSolver
+from uav_fault_estimator.qp_problem import sample_normal_equations
+from uav_fault_estimator.solve_status import SolveStatus
 
 
 @dataclass(frozen=True)
@@ -52,19 +53,13 @@ class BatchEstimator:
 
         Non-finite rows are left out like invalid ones.
         """
-        y, s = np.asarray(y, dtype=float), np.asarray(s, dtype=float)
-        keep = np.ones(y.shape, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
-        finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
-        weight = np.where(keep & finite, self.config.q_inv, 0.0)
-        gram, linear = stage_normal_equations(
-            np.where(finite, y, 0.0)[None], np.where(finite[:, None], s, 0.0)[None], weight[None]
-        )
+        p = len(self.config.faults)
+        gram, linear, _, _ = sample_normal_equations(y, s, valid, self.config.q_inv, p)
         open_gram, open_linear, count = self._open
-        self._open = (open_gram + gram[0], open_linear + linear[0], count + 1)
+        self._open = (open_gram + gram, open_linear + linear, count + 1)
         if count + 1 == self.cycle_samples:
             self._gram.append(self._open[0])
             self._linear.append(self._open[1])
-            p = len(self.config.faults)
             self._open = (np.zeros((p, p)), np.zeros(p), 0)
 
     def estimate(self) -> BatchEstimate:
@@ -72,11 +67,7 @@ class BatchEstimator:
         if not self._gram:
             return self._last
         config = self.config
-        problem = WindowQP(
-            self.cycles,
-            [fault.build_model() for fault in config.faults],
-            [(fault.lower_pct, fault.upper_pct) for fault in config.faults],
-        )
+        problem = config.window_qp(self.cycles)
         problem.set_data(np.array(self._gram), np.array(self._linear), np.diag(config.r_inv),
                          config.prior_pct)
         guess = np.zeros(problem.n_variables)

@@ -45,9 +45,6 @@ class SlidingGlrt:
             return None
         return laplacian_glrt(np.fromiter(self.samples, float))
 
-    def reset(self) -> None:
-        self.samples.clear()
-
 
 @dataclass(frozen=True)
 class Weibull:

@@ -55,16 +55,15 @@ class DetectorNode(Node):
         self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,
                                       "generators reset to the calibration")
         self.diagnostics = Diagnostics(self)
-        self.counts = {"published": 0, "skipped_samples": 0, "combined_alarms": 0}
+        self.counts = {"published": 0, "combined_alarms": 0}
 
     def process(self, time_s: float, payloads: dict) -> None:
-        if not self.detector.on_grid(time_s):
-            return
+        skipped = self.detector.skipped_samples
         sample = self.detector.update(time_s, payloads["state"], payloads["controls"])
-        if sample is None:
-            self.counts["skipped_samples"] += 1
-            self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
-                                    "missing)", self.health())
+        if sample is None:  # off the grid, or skipped
+            if self.detector.skipped_samples > skipped:
+                self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
+                                        "missing)", self.health())
             return
         self.publisher.publish(self.message(sample))
         self.counts["published"] += 1
@@ -100,7 +99,8 @@ class DetectorNode(Node):
 
 
     def health(self) -> dict[str, int]:
-        return {**self.counts, "stamp_resets": self.streams.restarts,
+        return {**self.counts, "skipped_samples": self.detector.skipped_samples,
+                "stamp_resets": self.streams.restarts,
                 "dropped_incomplete_samples": self.streams.dropped_sets}
 
 

@@ -12,6 +12,7 @@ from uav_sim.channels import PAPER_FAULT_NAMES
 
 from uav_fault_estimator.fault_models import SCALE_PARAMETER, FaultModel, make_model
 from uav_fault_estimator.noise_model import NoiseCalibration, load_noise_calibration
+from uav_fault_estimator.qp_problem import WindowQP
 from uav_fault_estimator.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
 
 ARRIVAL_CENTRES = ("filter", "previous_window")
@@ -96,6 +97,11 @@ class EstimatorConfig:
                 raise ValueError(f"{name} entries must be positive and finite")
         for fault in self.faults:
             fault.build_model()
+
+    def window_qp(self, stages: int) -> WindowQP:
+        """The MAP QP over `stages` stages for these faults' models and bounds."""
+        return WindowQP(stages, [fault.build_model() for fault in self.faults],
+                        [(fault.lower_pct, fault.upper_pct) for fault in self.faults])
 
     @property
     def q_inv(self) -> np.ndarray:

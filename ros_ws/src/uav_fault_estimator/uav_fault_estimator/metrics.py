@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uav_fault_estimator.solve_status import SolveStatus
+
 SETTLE_S = 20.0                 # metrics.json's settle_s: errors counted from here [s]
 DETECTION_THRESHOLD_PCT = 2.0   # metrics.json's detection_threshold_pct [%]
-STATUS_SOLVED = 0   # FaultEstimate.STATUS_SOLVED
-STATUS_WAITING = 4  # FaultEstimate.STATUS_WAITING: no data yet, not a failure
 
 
 @dataclass(frozen=True)
@@ -100,8 +100,8 @@ def fault_metrics(estimates: EstimateSeries, seeded: SeededSeries, settle_s: flo
 def solver_metrics(estimates: EstimateSeries) -> dict:
     """Solves (updates with a solution), their median, p99 and largest time, failures
     (updates that did not solve, other than waiting for data)."""
-    solved = estimates.statuses == STATUS_SOLVED
-    failed = ~solved & (estimates.statuses != STATUS_WAITING)
+    solved = estimates.statuses == SolveStatus.SOLVED
+    failed = ~solved & (estimates.statuses != SolveStatus.WAITING)
     times = estimates.solve_times_ms[solved]
     summary = {"name": "proxsuite", "solves": int(solved.sum()), "failures": int(failed.sum())}
     for key, value in (("median_ms", np.median), ("p99_ms", lambda t: np.percentile(t, 99)),

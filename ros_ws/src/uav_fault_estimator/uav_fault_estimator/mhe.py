@@ -10,31 +10,39 @@ data or a failed solve keep the last good estimate and report the status.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from uav_fault_estimator.arrival_cost import ArrivalCost, increment_prior
 from uav_fault_estimator.estimator_config import EstimatorConfig
-from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveOutcome, SolveStatus
-from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
+from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveOutcome
+from uav_fault_estimator.qp_problem import sample_normal_equations
+from uav_fault_estimator.solve_status import SolveStatus
 
 
 @dataclass
 class EstimateResult:
     """Output of one update.
 
+    column_names (p,): what each column estimates (faults, then any nuisance parameters);
     fault_pct (p,): estimate of f(t) [%]; window_pct (N, p): estimates over the window,
     oldest first [%]; status; iterations of the solver; update_time_ms: the whole update
     call [ms]; solver_time_ms: ProxSuite's own run time [ms] (0 when not solved).
     """
 
+    column_names: tuple[str, ...]
     fault_pct: np.ndarray
     window_pct: np.ndarray
     status: SolveStatus
     iterations: int
     update_time_ms: float
     solver_time_ms: float
+
+    def columns(self, names: Sequence[str]) -> list[int]:
+        """Indices of the named columns (ValueError for a name not estimated)."""
+        return [self.column_names.index(name) for name in names]
 
 
 class MovingHorizonEstimator:
@@ -43,18 +51,25 @@ class MovingHorizonEstimator:
     def __init__(self, config: EstimatorConfig) -> None:
         config.validate()
         self.config = config
-        n, p = config.horizon, len(config.faults)
-        models = [fault.build_model() for fault in config.faults]
-        self.problem = WindowQP(
-            n, models, [(fault.lower_pct, fault.upper_pct) for fault in config.faults])
-        terms = [model.increment_terms() for model in models]
-        increments = np.array([increment_prior(term) for term in terms])
-        self.arrival = ArrivalCost(
-            np.array([term.coefficient for term in terms]), increments[:, 0],
-            increments[:, 1], config.prior_pct, np.diag(config.r_diag_pct2),
-            config.arrival_inflation, config.arrival_floor)
-        self.solver = ProxQPSolver(self.problem, config.solver)
+        self.problem = config.window_qp(config.horizon)
+        terms = self.problem.increment_terms
+        self._increments = np.array([increment_prior(term) for term in terms])
+        self._coefficients = np.array([term.coefficient for term in terms])
         self._q_inv = config.q_inv
+        self.column_names = tuple(fault.name for fault in config.faults)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to the state before any data (after a restart of the residual source): empty
+        window, arrival cost and warm start at the prior, and a new ProxSuite instance, whose
+        preconditioner is made from the first window it solves. The QP's pattern is kept."""
+        config = self.config
+        n, p = config.horizon, len(config.faults)
+        self.solver = ProxQPSolver(self.problem, config.solver)
+        self.arrival = ArrivalCost(
+            self._coefficients, self._increments[:, 0], self._increments[:, 1],
+            config.prior_pct, np.diag(config.r_diag_pct2), config.arrival_inflation,
+            config.arrival_floor)
         # Each sample's data term (stage_normal_equations), made once when it arrives.
         self._gram = np.zeros((n, p, p))
         self._linear = np.zeros((n, p))
@@ -112,23 +127,11 @@ class MovingHorizonEstimator:
         marked valid); it then enters the window with all channels left out, so the next
         updates are not poisoned by it.
         """
-        m, p = self._q_inv.size, self._linear.shape[1]
         for window in (self._gram, self._linear, self._has_data):
             window[:-1] = window[1:]
-        self._gram[-1], self._linear[-1], self._has_data[-1] = 0.0, 0.0, False
-        y = np.asarray(y, dtype=float)
-        s = np.asarray(s, dtype=float)
-        keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
-        if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
-            return False
-        finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
-        weight = np.where(keep & finite, q_inv, 0.0)
-        gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],
-                                              np.where(finite[:, None], s, 0.0)[None],
-                                              weight[None])
-        self._gram[-1], self._linear[-1] = gram[0], linear[0]
-        self._has_data[-1] = bool(weight.any())
-        return bool(np.all(finite[keep]))
+        self._gram[-1], self._linear[-1], self._has_data[-1], clean = sample_normal_equations(
+            y, s, valid, q_inv, self._linear.shape[1])
+        return clean
 
     def _shift_guess(self) -> None:
         """Move the last good solution one sample back in time (warm start, handover)."""
@@ -141,6 +144,7 @@ class MovingHorizonEstimator:
         self, status: SolveStatus, outcome: SolveOutcome | None, start: float
     ) -> EstimateResult:
         return EstimateResult(
+            column_names=self.column_names,
             fault_pct=self._window_pct[-1].copy(),
             window_pct=self._window_pct.copy(),
             status=status,

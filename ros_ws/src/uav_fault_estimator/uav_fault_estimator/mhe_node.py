@@ -25,7 +25,7 @@ from uav_sim.node_tools import (
 
 from uav_fault_estimator.estimator_config import config_from_parameters, noise_calibration
 from uav_fault_estimator.mhe import EstimateResult, MovingHorizonEstimator
-from uav_fault_estimator.proxqp_solver import SolveStatus
+from uav_fault_estimator.solve_status import SolveStatus
 
 PARAMETERS = {
     "fault_names": "the estimated faults: columns of the residuals' S, by name",
@@ -68,8 +68,8 @@ class MheNode(Node):
         self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
         self.noise = noise_calibration(self.parameters)
         self.names = list(self.parameters["fault_names"])  # published
-        self.estimated = [fault.name for fault in self.config.faults]  # faults, then nuisance
         self.estimator = MovingHorizonEstimator(self.config)
+        self.estimated = self.estimator.column_names  # faults, then any nuisance parameters
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", STREAM_QOS)
         self.create_subscription(Residuals, "residuals", self.on_residuals, STREAM_QOS)
         self.diagnostics = Diagnostics(self)
@@ -84,7 +84,7 @@ class MheNode(Node):
             self.get_logger().warning(
                 f"residual stamp {time_s:.3f} s is not newer than {self.window_stamps_s[-1]:.3f}"
                 " s: the source restarted, estimator reset")
-            self.estimator = MovingHorizonEstimator(self.config)
+            self.estimator.reset()
             self.window_stamps_s.clear()
             self.counts["stamp_resets"] += 1
         columns = self.columns(message)
@@ -114,16 +114,16 @@ class MheNode(Node):
 
     def estimate_message(self, time_s: float, result: EstimateResult) -> FaultEstimate:
         stamps = self.window_stamps_s
-        faults = len(self.names)
+        published = result.columns(self.names)
         return FaultEstimate(
             header=header(time_s),
             names=self.names,
-            values_pct=result.fault_pct[:faults].tolist(),
+            values_pct=result.fault_pct[published].tolist(),
             solver_status=int(result.status),
             updated=result.status is SolveStatus.SOLVED,
             horizon=self.config.horizon,
             horizon_s=stamps[-1] - stamps[0],
-            window_values_pct=result.window_pct[:, :faults].ravel().tolist(),  # row-major N x p
+            window_values_pct=result.window_pct[:, published].ravel().tolist(),  # row-major N x p
             iterations=result.iterations,
             solve_time_ms=result.update_time_ms,
         )
@@ -141,8 +141,8 @@ class MheNode(Node):
             self.counts["not_solved"] += 1
             level, text = WARN, f"{result.status.name.lower()}: last good estimate kept"
         times = np.array(self.update_times_ms) if self.update_times_ms else np.zeros(1)
-        nuisance = dict(zip(self.estimated[len(self.names):],
-                            result.fault_pct[len(self.names):], strict=True))
+        nuisance = {name: value for name, value in
+                    zip(self.estimated, result.fault_pct, strict=True) if name not in self.names}
         self.diagnostics.update(level, text, {
             **self.counts,
             **{f"{name}_mps": f"{value:.2f}" for name, value in nuisance.items()},

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from ament_index_python.packages import get_package_share_directory
+from uav_sim.paths import config_path
 
 from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 
@@ -62,7 +62,7 @@ def fit_noise(residuals: dict[str, list[np.ndarray]]) -> NoiseCalibration:
 
 def shipped_noise_path() -> Path:
     """The package's config/residual_noise.yaml."""
-    return Path(get_package_share_directory("uav_fault_estimator")) / "config" / CALIBRATION_FILE
+    return config_path("uav_fault_estimator", CALIBRATION_FILE)
 
 
 def load_noise_calibration(path: str | Path = "") -> NoiseCalibration:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from uav_sim.channels import FAULT_NAMES
 from uav_sim.paths import default_parameters
+from uav_sim.sample_grid import on_grid
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
@@ -52,7 +53,7 @@ def fly_and_estimate(
     generator = residual_generator(residual)
     estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
     noise = noise_calibration(mhe)
-    published = len(mhe["fault_names"])
+    published = list(mhe["fault_names"])
     simulation = Simulation(scenario)
     period_s = float(residual["update_period_s"])
     stamps, values, statuses, times_ms, seeded = [], [], [], [], []
@@ -61,13 +62,12 @@ def fly_and_estimate(
         wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
         result = generator.update(sample.time_s, sample.state, sample.controls, wind,
                                   None if true_wind else sample.air_data)
-        on_grid = abs(sample.time_s / period_s - round(sample.time_s / period_s)) < 1e-9
-        if result is not None and on_grid:
+        if result is not None and on_grid(sample.time_s, period_s):
             estimate = estimator.update(
                 result.residual, result.sensitivity, result.valid,
                 noise.q_diag(result.wind_source, mhe["noise_variance_factor"]))
             stamps.append(sample.time_s)
-            values.append(estimate.fault_pct[:published])
+            values.append(estimate.fault_pct[estimate.columns(published)])
             statuses.append(int(estimate.status))
             times_ms.append(estimate.update_time_ms)
             seeded.append(sample.seeded_faults_pct)
@@ -88,7 +88,7 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> tuple[np.ndarray, ...]:
     in uav_sim.channels order."""
     simulation = Simulation(scenario)
     every = round(period_s / simulation.period_s)
-    if every < 1 or abs(every * simulation.period_s - period_s) > 1e-9:
+    if every < 1 or not on_grid(period_s, simulation.period_s):
         raise ValueError(f"{period_s} s is not a multiple of the sensor period "
                          f"{simulation.period_s} s")
     samples = [simulation.sample()]
@@ -119,8 +119,7 @@ def fault_free_residuals(scenario: Scenario) -> np.ndarray:
     while True:
         result = generator.update(sample.time_s, sample.state, sample.controls,
                                   sample.wind_filtered_ned_mps, sample.air_data)
-        on_grid = abs(sample.time_s / period_s - round(sample.time_s / period_s)) < 1e-9
-        if result is not None and on_grid and result.valid.all():
+        if result is not None and on_grid(sample.time_s, period_s) and result.valid.all():
             rows.append(result.residual)
         if simulation.finished:
             return np.array(rows)

@@ -1,31 +1,19 @@
 """ProxSuite (ProxQP, sparse backend) on a fixed-pattern WindowQP, with status mapping.
 
-Choices, each measured with scripts/bench_mhe.py (N = 50, p = 4, ProxSuite 0.8.0):
-- Sparse backend on the time-major QP (qp_problem.py): the KKT matrix is banded. The dense
-  backend on the same QP took about 5 ms per update, the increment form with box
-  constraints (dense Hessian) about 3 ms; sparse takes about 0.4 ms.
-- The objective is scaled to a unit mean Hessian diagonal (`objective_scale`): without it,
-  residual units and noise levels set the Hessian's scale (1e3 and more), the absolute
-  tolerance became unreachable and updates stalled at the iteration limit.
+- Sparse backend: the time-major QP's KKT matrix is banded (qp_problem.py).
+- The objective goes in scaled to a unit mean Hessian diagonal (`objective_scale`), so that
+  the absolute tolerance means the same whatever the residual units and noise levels.
 - Warm start from the shifted previous primal and dual solution, with a small initial
-  mu_in (1e-5) on updates: the guess is close, so constraints are enforced stiffly at
-  once, and most updates need no penalty update. Each penalty update is a
-  refactorisation whose cost grows faster than N: starting at 1e-4, nearly every update
-  needed one and N = 200 cost 7.5 ms; at 1e-5 the median is linear in N (N = 25 ... 400:
-  0.18 ... 2.2 ms) and only the rarer updates that still need one are slower (p99 7.5 ms
-  at N = 200). Holding mu_in fixed (mu_min_in) was tried too: stalled updates, rejected.
-- Ruiz preconditioning computed once at init; two iterative refinement steps. Recomputing
-  it once more on the first full window (update_preconditioner) cut the iterations from
-  4.2 to 3.7 per update on the flown sequence, but the graph's estimates then differed
-  from the offline chain's by up to 2.5e-5 % on the demo test's flight (without it they
-  agree to 1e-9; the cause inside ProxSuite not traced): not taken, so that a run can be
-  reproduced offline to the last digit.
+  penalty mu_in (WARM_START_MU_IN) on updates: the guess is close, so constraints are
+  enforced stiffly at once and most updates need no penalty update (a refactorisation
+  whose cost grows faster than N).
+- Ruiz preconditioning computed on the first window only; two iterative refinement steps.
+Why each, as measured: the README's estimator section ("Why the solver is set up so").
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,19 +21,10 @@ from proxsuite import proxqp
 
 from uav_fault_estimator.estimator_config import SolverSettings
 from uav_fault_estimator.qp_problem import WindowQP
+from uav_fault_estimator.solve_status import SolveStatus
 
 WARM_START_MU_IN = 1e-5
 ITERATIVE_REFINEMENT_STEPS = 2
-
-
-class SolveStatus(IntEnum):
-    """Estimate status; values equal the FaultEstimate message constants."""
-
-    SOLVED = 0
-    MAX_ITERATIONS = 1
-    INFEASIBLE = 2
-    INVALID_DATA = 3
-    WAITING = 4
 
 
 _STATUS_OF = {

@@ -6,13 +6,9 @@ the fault vector f(τ) ∈ R^p is constant within a stage. The QP is
     minimise ½ xᵀ H x + gᵀ x   subject to  A x = b,  l ≤ C x ≤ u
 
 with x = [f(0), f(1), …, f(T-1), slacks] and the constraint rows both time-major, so the
-KKT matrix is banded and one factorisation costs O(T). (A first version with the rows
-grouped by fault, and without proxqp_solver's objective scaling, hung in ProxSuite 0.8.0
-on one solve of a benchmark sequence.)
-ProxSuite's penalty updates cost more than linearly in T (proxqp_solver.py says how they
-are kept rare). Only the data part of H
-(block diagonal, one pxp block per stage) and g change from one update to the next; the
-sparsity pattern, A, b, C, l and u are fixed at construction.
+KKT matrix is banded and one factorisation costs O(T). Only the data part of H (block
+diagonal, one pxp block per stage) and g change from one update to the next; the sparsity
+pattern, A, b, C, l and u are fixed at construction.
 """
 
 from __future__ import annotations
@@ -40,6 +36,29 @@ def stage_normal_equations(
     gram = np.matmul(weighted_s.transpose(0, 2, 1), s)
     linear = np.einsum("tmi,tm->ti", weighted_s, y)
     return gram, linear
+
+
+def sample_normal_equations(
+    y: np.ndarray, s: np.ndarray, valid: np.ndarray | None, q_inv: np.ndarray, columns: int
+) -> tuple[np.ndarray, np.ndarray, bool, bool]:
+    """One residual sample's data term, with Q⁻¹ on the rows that are valid and finite and
+    0 on the others (a lost channel, a non-finite value: left out of the fit).
+
+    Inputs: y (m,) residuals; s (m, p) signatures [residual unit / %]; valid (m,) booleans
+    or None for all; q_inv (m,) [1 / residual unit²]; columns p. Returns G (p, p) [1/%²],
+    h (p,) [1/%], whether any row entered, and whether the sample was clean (shapes right,
+    every row marked valid finite). A misshapen sample enters as no data.
+    """
+    m, p = q_inv.size, columns
+    y, s = np.asarray(y, dtype=float), np.asarray(s, dtype=float)
+    keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
+        return np.zeros((p, p)), np.zeros(p), False, False
+    finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
+    weight = np.where(keep & finite, q_inv, 0.0)
+    gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],
+                                          np.where(finite[:, None], s, 0.0)[None], weight[None])
+    return gram[0], linear[0], bool(weight.any()), bool(np.all(finite[keep]))
 
 
 def _grid(first: int, stages: int, width: int) -> np.ndarray:
@@ -76,7 +95,7 @@ class WindowQP:
             raise ValueError(f"the QP needs at least one stage, got {stages}")
         self.stages = stages
         self.n_faults = p = len(models)
-        terms = [model.increment_terms() for model in models]
+        self.increment_terms = terms = [model.increment_terms() for model in models]
         laplacian = [k for k, term in enumerate(terms) if term.abs_cost > 0.0]
         self.f_index = _grid(0, stages, p)
         slack_index = _grid(stages * p, stages - 1, len(laplacian))
@@ -212,10 +231,6 @@ class WindowQP:
         g[self.f_index] -= linear
         g[self.f_index[0]] -= prior_information @ prior_pct
 
-    def objective(self, x: np.ndarray) -> float:
-        """½ xᵀHx + gᵀx (without the constant), for checks and comparisons."""
-        return float(0.5 * x @ (self.H @ x) + self.g @ x)
-
 
 def _positions(pattern: sp.csc_matrix, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """Index into pattern.data of each (row, col) entry; all entries must be in the pattern.
@@ -234,8 +249,9 @@ class _RowBuilder:
 
     def __init__(self, n_variables: int) -> None:
         self.n_variables = n_variables
-        self._eq: list[tuple[np.ndarray, np.ndarray, float, float]] = []
-        self._in: list[tuple[np.ndarray, np.ndarray, float, float]] = []
+        # (columns, values, lower, upper, first stage) per group of rows
+        self._eq: list[tuple[np.ndarray, np.ndarray, float, float, int]] = []
+        self._in: list[tuple[np.ndarray, np.ndarray, float, float, int]] = []
 
     def add_equality(self, columns: np.ndarray, values: np.ndarray, rhs: float) -> None:
         """One row per stage: Σ_j values[τ, j] x[columns[τ, j]] = rhs."""

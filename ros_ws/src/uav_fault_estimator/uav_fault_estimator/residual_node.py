@@ -8,7 +8,6 @@ filtered wind otherwise (residuals.py); a fallback is a WARN on /diagnostics.
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 
@@ -23,6 +22,7 @@ from uav_sim.node_tools import (
     declare_parameters,
     run_node,
 )
+from uav_sim.sample_grid import GRID_TOLERANCE_S, next_grid_time
 
 from uav_fault_estimator.matched_streams import MatchedStreams
 from uav_fault_estimator.prediction import residual_generator
@@ -41,8 +41,6 @@ PARAMETERS = {
 STREAMS = {"controls": (ControlInputs, controls_array),
            "wind/filtered": (WindEstimate, wind_array), "state": (AircraftState, state_array)}
 OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array)}
-# Stamps within this fraction of a period of the publication grid count as on it.
-STAMP_TOLERANCE = 1e-6
 
 
 class ResidualNode(Node):
@@ -92,11 +90,11 @@ class ResidualNode(Node):
             self.counts["filtered_wind_samples"] += 1
         period_s = self.parameters["update_period_s"]
         if self.next_publish_s is None:  # the first publication on the period's grid
-            self.next_publish_s = math.ceil(time_s / period_s - STAMP_TOLERANCE) * period_s
-        if time_s >= self.next_publish_s - STAMP_TOLERANCE * period_s:
+            self.next_publish_s = next_grid_time(time_s, period_s, after=False)
+        if time_s >= self.next_publish_s - GRID_TOLERANCE_S:
             self.publisher.publish(self.message(sample))
             self.counts["published"] += 1
-            self.next_publish_s = (math.floor(time_s / period_s + STAMP_TOLERANCE) + 1) * period_s
+            self.next_publish_s = next_grid_time(time_s, period_s, after=True)
             self.report(sample)
 
     def message(self, sample: ResidualSample) -> Residuals:

@@ -27,8 +27,9 @@ from typing import Any
 
 import numpy as np
 import yaml
-from ament_index_python.packages import get_package_share_directory
 from uav_sim.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_sim.paths import config_path
+from uav_sim.sample_grid import on_grid
 
 from uav_fault_estimator.change_detection import (
     SlidingGlrt,
@@ -46,7 +47,6 @@ PARAMETER_NAMES = {
 }
 _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
 _AILERON, _ELEVATOR = (CONTROL_CHANNELS.index(name) for name in ("aileron", "elevator"))
-GRID_TOLERANCE_S = 1e-6
 
 
 def regressions(state: np.ndarray, controls: np.ndarray,
@@ -157,6 +157,9 @@ class SelfTuningDetector:
                                     for c in CHANNELS])
         self.parameter_threshold = weibull_threshold(calibration.parameter,
                                                      false_alarm_probability)
+        # Samples on the grid that could not be used (the first after a reset; a rate or
+        # surface missing), over the detector's life.
+        self.skipped_samples = 0
         self.reset()
 
     def reset(self) -> None:
@@ -168,25 +171,22 @@ class SelfTuningDetector:
         self.previous_yaw_rate: float | None = None
         self.started_s: float | None = None
 
-    def on_grid(self, time_s: float) -> bool:
-        """Whether time_s [s] is a sample of the detector's grid."""
-        period = self.calibration.sample_period_s
-        return abs(time_s - round(time_s / period) * period) < GRID_TOLERANCE_S
-
     def update(self, time_s: float, state: np.ndarray,
                controls: np.ndarray) -> DetectorSample | None:
         """One sample (state and controls arrays, uav_sim.channels order). None off the grid,
         for the first sample (the yaw model needs r[k-1]), and for a sample with a
         non-finite value it needs (skipped: the RLS keeps its parameters)."""
-        if not self.on_grid(time_s):
+        if not on_grid(time_s, self.calibration.sample_period_s):
             return None
         rates = state[[_P, _Q, _R]]
         surfaces = controls[[_AILERON, _ELEVATOR]]
         if not (np.all(np.isfinite(rates)) and np.all(np.isfinite(surfaces))):
+            self.skipped_samples += 1
             return None
         previous, self.previous_yaw_rate = self.previous_yaw_rate, float(state[_R])
         if previous is None:
             self.started_s = time_s
+            self.skipped_samples += 1
             return None
         settled = time_s - self.started_s >= self.calibration.settle_s
         regression = regressions(state, controls, previous)
@@ -214,8 +214,7 @@ class SelfTuningDetector:
 
 def shipped_calibration_path() -> Path:
     """The package's config/detector_calibration.yaml (scripts/calibrate_detector.py)."""
-    return (Path(get_package_share_directory("uav_fault_estimator")) / "config"
-            / "detector_calibration.yaml")
+    return config_path("uav_fault_estimator", "detector_calibration.yaml")
 
 
 def load_calibration(path: str, window: int, forgetting_factor: float) -> Calibration:
