@@ -42,6 +42,7 @@ from uav_fault_estimator.processes import (
     stop_all,
 )
 from uav_fault_estimator.report import table
+from uav_sim.messages import stamp_seconds
 from uav_sim.paths import default_parameters
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
@@ -97,7 +98,7 @@ class Progress:
                                       STREAM_QOS)
 
     def _on_clock(self, message: Any) -> None:
-        self.time_s = max(self.time_s, message.clock.sec + 1e-9 * message.clock.nanosec)
+        self.time_s = max(self.time_s, stamp_seconds(message.clock))
 
     def _on_estimate(self, _message: Any) -> None:
         self.estimates += 1

@@ -15,9 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from uav_sim.frames import north_east_m, wind_triangle_ned_mps
-from uav_sim.messages import air_data_array, stamp_nanoseconds, state_array
-
-from uav_fault_estimator.recording import stamp_seconds
+from uav_sim.messages import air_data_array, stamp_nanoseconds, stamp_seconds, state_array
 
 RESIDUAL_LABELS = ("x [m/s²]", "y [m/s²]", "z [m/s²]", "roll [rad/s²]", "pitch [rad/s²]",
                    "yaw [rad/s²]")
@@ -37,7 +35,7 @@ ALARM_COLOR = "tab:red"
 
 
 def _stamps(messages: list) -> np.ndarray:
-    return np.array([stamp_seconds(m) for m in messages])
+    return np.array([stamp_seconds(m.header.stamp) for m in messages])
 
 
 def plot_run(data: dict[str, list], out: Path) -> list[Path]:
@@ -123,7 +121,7 @@ def _wind_triangle(state: list, air_data: list) -> tuple[np.ndarray, np.ndarray]
         stamp_ns = stamp_nanoseconds(message.header.stamp)
         if stamp_ns in states:
             values = states[stamp_ns]
-            stamps.append(stamp_ns * 1e-9)
+            stamps.append(stamp_seconds(message.header.stamp))
             winds.append(wind_triangle_ned_mps(values[6:9], *values[3:6],
                                                air_data_array(message)))
     return np.array(stamps), np.array(winds).reshape(-1, 3)
@@ -154,7 +152,7 @@ def _wind_figure(data: dict[str, list], path: Path) -> Path:
 
 def _mark_alarms(axis: plt.Axes, alarms: list, label: str = "combined alarm") -> None:
     """Shade the samples at which detector_node's combined alarm was raised."""
-    raised = [stamp_seconds(m) for m in alarms if m.combined_alarm]
+    raised = [stamp_seconds(m.header.stamp) for m in alarms if m.combined_alarm]
     for k, time_s in enumerate(raised):
         axis.axvspan(time_s - 0.1, time_s + 0.1, color=ALARM_COLOR, alpha=0.3,
                      label=label if k == 0 else None)
@@ -192,5 +190,5 @@ def _first_fault_start(seeded: list) -> float | None:
     """The first stamp at which any seeded fault is non-zero; None if none ever is."""
     for message in seeded:
         if any(value != 0.0 for value in message.values_pct):
-            return stamp_seconds(message)
+            return stamp_seconds(message.header.stamp)
     return None

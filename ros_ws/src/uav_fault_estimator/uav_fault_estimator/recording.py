@@ -14,7 +14,7 @@ import numpy as np
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
-from uav_sim.messages import controls_array, stamp_nanoseconds, state_array
+from uav_sim.messages import controls_array, stamp_nanoseconds, stamp_seconds, state_array
 
 
 def project_typestore(message_dirs: list[Path]) -> Typestore:
@@ -77,11 +77,6 @@ def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dic
     return messages
 
 
-def stamp_seconds(message) -> float:
-    """A decoded message's header stamp [s]."""
-    return message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec
-
-
 def flight_from_recording(bag: Path, typestore: Typestore,
                           period_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A recorded flight's /state and /controls matched by stamp, every period_s [s] of sim
@@ -96,7 +91,7 @@ def flight_from_recording(bag: Path, typestore: Typestore,
     times, states, inputs = [], [], []
     for message in messages["/state"]:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
-        time_s = stamp_ns * 1e-9
+        time_s = stamp_seconds(message.header.stamp)
         if stamp_ns in controls and abs(time_s - round(time_s / period_s) * period_s) < 1e-6:
             times.append(time_s)
             states.append(state_array(message))

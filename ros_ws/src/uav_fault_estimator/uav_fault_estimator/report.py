@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from uav_sim.messages import stamp_seconds
 
 from uav_fault_estimator.metrics import (
     DETECTION_THRESHOLD_PCT,
@@ -18,7 +19,7 @@ from uav_fault_estimator.metrics import (
     fault_metrics,
     solver_metrics,
 )
-from uav_fault_estimator.recording import RECEIVED_NS, stamp_seconds
+from uav_fault_estimator.recording import RECEIVED_NS
 
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
@@ -52,17 +53,17 @@ def run_from(messages: dict[str, list], bag: Path) -> Run:
     return Run(
         estimates=EstimateSeries(
             names=list(estimates[0].names),
-            stamps_s=np.array([stamp_seconds(m) for m in estimates]),
+            stamps_s=np.array([stamp_seconds(m.header.stamp) for m in estimates]),
             values_pct=np.array([m.values_pct for m in estimates]),
             statuses=np.array([m.solver_status for m in estimates]),
             solve_times_ms=np.array([m.solve_time_ms for m in estimates]),
         ),
         seeded=SeededSeries(
             names=list(seeded[0].names),
-            stamps_s=np.array([stamp_seconds(m) for m in seeded]),
+            stamps_s=np.array([stamp_seconds(m.header.stamp) for m in seeded]),
             values_pct=np.array([m.values_pct for m in seeded]),
         ),
-        duration_s=stamp_seconds(messages[STATE_TOPIC][-1]),
+        duration_s=stamp_seconds(messages[STATE_TOPIC][-1].header.stamp),
         wall_s=1e-9 * (max(received_ns) - min(received_ns)),
         alarms=alarm_series(messages.get(ALARM_TOPIC) or []),
     )
@@ -74,7 +75,7 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
         return None
     return AlarmSeries(
         channel_names=list(alarms[0].channel_names),
-        stamps_s=np.array([stamp_seconds(m) for m in alarms]),
+        stamps_s=np.array([stamp_seconds(m.header.stamp) for m in alarms]),
         alarm=np.array([m.alarm for m in alarms], dtype=bool),
         parameter_alarm=np.array([m.parameter_alarm for m in alarms], dtype=bool),
         combined_alarm=np.array([m.combined_alarm for m in alarms], dtype=bool),
