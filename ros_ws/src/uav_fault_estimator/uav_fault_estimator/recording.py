@@ -15,6 +15,7 @@ from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 from uav_sim.messages import controls_array, stamp_nanoseconds, stamp_seconds, state_array
+from uav_sim.sample_grid import on_grid
 
 
 def project_typestore(message_dirs: list[Path]) -> Typestore:
@@ -92,7 +93,7 @@ def flight_from_recording(bag: Path, typestore: Typestore,
     for message in messages["/state"]:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
         time_s = stamp_seconds(message.header.stamp)
-        if stamp_ns in controls and abs(time_s - round(time_s / period_s) * period_s) < 1e-6:
+        if stamp_ns in controls and on_grid(time_s, period_s):
             times.append(time_s)
             states.append(state_array(message))
             inputs.append(controls_array(controls[stamp_ns]))
