@@ -41,13 +41,12 @@ from uav_fault_estimator.processes import (
     ros2_run_argv,
     stop_all,
 )
-from uav_fault_estimator.report import table
+from uav_fault_estimator.report import residual_update_period_s, table
 from uav_sim.messages import stamp_seconds
 from uav_sim.paths import default_parameters
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-UPDATE_PERIOD_S = 0.5  # residual_node's update_period_s: one estimate per residual
 PROGRESS_EVERY_S = 30.0  # of simulated time
 STARTUP_TIMEOUT_S = 60.0  # wall time for the nodes to start and find each other
 STALL_TIMEOUT_S = 60.0  # wall time without simulated time going on, once flying
@@ -135,7 +134,8 @@ class Demo:
         self.nodes: dict[str, RosProcess] = {}  # by executable, in start order
         self.progress: Progress | None = None
         self.next_report_s = PROGRESS_EVERY_S
-        self.expected = round(scenario.duration_s / UPDATE_PERIOD_S)
+        # one estimate per residual: residual_node runs with its defaults here
+        self.expected = round(scenario.duration_s / residual_update_period_s())
 
     def start(self, package: str, executable: str, ros_args: list[str]) -> RosProcess:
         process = RosProcess(ros2_run_argv(package, executable, ros_args),

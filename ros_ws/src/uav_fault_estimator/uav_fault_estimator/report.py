@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 from uav_sim.messages import stamp_seconds
+from uav_sim.paths import default_parameters
 
 from uav_fault_estimator.metrics import (
     DETECTION_THRESHOLD_PCT,
@@ -84,10 +85,13 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
     )
 
 
-def run_metrics(run: Run, scenario: str, update_period_s: float = 0.5,
+def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
                 settle_s: float = SETTLE_S,
                 threshold_pct: float = DETECTION_THRESHOLD_PCT) -> dict:
-    """metrics.json as DESIGN.md lays it out."""
+    """metrics.json as DESIGN.md lays it out. update_period_s [s]: residual_node's, one
+    estimate per residual (default: its default parameter, config/residual_node.yaml)."""
+    if update_period_s is None:
+        update_period_s = residual_update_period_s()
     faults, false_alarms = fault_metrics(run.estimates, run.seeded, settle_s, threshold_pct)
     return {
         "scenario": scenario,
@@ -105,6 +109,13 @@ def run_metrics(run: Run, scenario: str, update_period_s: float = 0.5,
         },
         "alarms": alarm_metrics(run.alarms, run.seeded) if run.alarms else None,
     }
+
+
+def residual_update_period_s() -> float:
+    """residual_node's default update_period_s [s] (config/residual_node.yaml, its one
+    home): the nodes publish a residual and an estimate every this much sim time."""
+    parameters = default_parameters("uav_fault_estimator", "residual_node.yaml")
+    return float(parameters["update_period_s"])
 
 
 def table(metrics: dict) -> str:
