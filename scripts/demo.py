@@ -32,8 +32,7 @@ from typing import Any
 
 import yaml
 from report import write_report
-from rosbags.rosbag2 import ReaderError
-from uav_fault_estimator.processes import (
+from ros_processes import (
     RosProcess,
     exit_status_text,
     fast_flight_ros_args,
@@ -41,6 +40,7 @@ from uav_fault_estimator.processes import (
     ros2_run_argv,
     stop_all,
 )
+from rosbags.rosbag2 import ReaderError
 from uav_fault_estimator.report import residual_update_period_s, table
 from uav_sim.messages import stamp_seconds
 from uav_sim.paths import default_parameters

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 from helpers.graph import RosGraph
-from uav_fault_estimator.processes import RosProcess, reserve_domain_id
+from ros_processes import RosProcess, reserve_domain_id
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 from helpers.process_table import NODE_NAMES, kill_all, processes
-from uav_fault_estimator.processes import wait_until
+from ros_processes import wait_until
 from uav_fault_msgs.msg import FaultEstimate
 from uav_sim.node_tools import STREAM_QOS
 

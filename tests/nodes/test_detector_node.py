@@ -8,8 +8,8 @@ import subprocess
 
 import numpy as np
 import pytest
+from ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.offline import fly_on_grid
-from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.self_tuning import (
     CHANNELS,
     SelfTuningDetector,

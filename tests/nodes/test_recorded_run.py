@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 import yaml
 from ament_index_python.packages import get_package_share_directory
+from ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_estimator import figures, report
 from uav_fault_estimator.offline import fly_on_grid
-from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_estimator.recording import (
     flight_from_recording,
     project_typestore,

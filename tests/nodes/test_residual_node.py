@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from uav_fault_estimator.processes import fast_flight_ros_args, ros2_run_argv
+from ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_msgs.msg import Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.messages import stamp_seconds

@@ -7,8 +7,8 @@ import subprocess
 
 import pytest
 from geometry_msgs.msg import Vector3Stamped
+from ros_processes import ros2_run_argv
 from rosgraph_msgs.msg import Clock
-from uav_fault_estimator.processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 from uav_sim.messages import stamp_seconds
 from uav_sim.node_tools import STREAM_QOS

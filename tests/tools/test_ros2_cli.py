@@ -11,7 +11,7 @@ import time
 import pytest
 from helpers.echo_output import echo_documents
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, STAMP_NANOSEC, STAMP_SEC, topic_of
-from uav_fault_estimator.processes import RosProcess
+from ros_processes import RosProcess
 
 pytestmark = pytest.mark.integration
 
