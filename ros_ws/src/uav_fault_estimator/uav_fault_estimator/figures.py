@@ -40,76 +40,106 @@ def _stamps(messages: list) -> np.ndarray:
 
 def plot_run(data: dict[str, list], out: Path) -> list[Path]:
     """Write every figure of a recording's messages (recording.read_topics of TOPICS) into
-    out; the paths written."""
+    out, each when its topics were recorded; the paths written."""
     out.mkdir(parents=True, exist_ok=True)
     written = []
-    state, t_state = data["/state"], _stamps(data["/state"])
+    state = data["/state"]
     if state:
-        figure, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
-        axes[0].plot(t_state, [m.altitude_m for m in state])
-        axes[0].set_ylabel("altitude [m]")
-        speed = [math.hypot(m.velocity_north_mps, m.velocity_east_mps) for m in state]
-        axes[1].plot(t_state, speed)
-        axes[1].set_ylabel("ground speed [m/s]")
-        for name in ("roll", "pitch"):
-            axes[2].plot(t_state, np.degrees([getattr(m, f"{name}_rad") for m in state]),
-                         label=name)
-        axes[2].set_ylabel("attitude [deg]")
-        axes[2].legend()
-        axes[2].set_xlabel("simulation time [s]")
-        written.append(_save(figure, out / "states.png"))
-        north, east = north_east_m([m.latitude_rad for m in state],
-                                   [m.longitude_rad for m in state],
-                                   (state[0].latitude_rad, state[0].longitude_rad))
-        figure, axis = plt.subplots(figsize=(6, 6))
-        axis.plot(east, north)
-        axis.set_xlabel("east [m]")
-        axis.set_ylabel("north [m]")
-        axis.set_aspect("equal")
-        axis.set_title("ground track from the start")
-        written.append(_save(figure, out / "track.png"))
+        written.append(_states_figure(state, out / "states.png"))
+        written.append(_track_figure(state, out / "track.png"))
     if data["/wind/filtered"]:
         written.append(_wind_figure(data, out / "wind.png"))
     residuals = data["/residuals"]
     if residuals:
-        t_res = _stamps(residuals)
-        values = np.array([m.residual for m in residuals])
-        figure, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
-        for row, axis in enumerate(axes):
-            axis.plot(t_res, values[:, row])
-            axis.set_ylabel(RESIDUAL_LABELS[row], fontsize=8)
-        axes[-1].set_xlabel("simulation time [s]")
-        written.append(_save(figure, out / "residuals.png"))
-        names = list(residuals[0].fault_names)
-        column = np.array([np.reshape(m.sensitivity, (6, -1))[:, 0] for m in residuals])
-        figure, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
-        for row, axis in enumerate(axes):
-            axis.plot(t_res, column[:, row])
-            axis.set_ylabel(RESIDUAL_LABELS[row].replace("]", " per %]"), fontsize=8)
-        axes[0].set_title(f"sensitivity column: {names[0]}")
-        axes[-1].set_xlabel("simulation time [s]")
-        written.append(_save(figure, out / "sensitivity.png"))
-    estimates, seeded = data["/faults/estimate"], data["/faults/seeded"]
-    if estimates and seeded:
-        names = list(estimates[0].names)
-        seeded_names = list(seeded[0].names)
-        values = np.array([m.values_pct for m in estimates])
-        truth = np.array([m.values_pct for m in seeded])
-        figure, axes = plt.subplots(len(names), 1, figsize=(9, 2.4 * len(names)), sharex=True)
-        for j, (name, axis) in enumerate(zip(names, np.atleast_1d(axes), strict=True)):
-            if name in seeded_names:
-                axis.plot(_stamps(seeded), truth[:, seeded_names.index(name)], "k--",
-                          label="seeded")
-            axis.plot(_stamps(estimates), values[:, j], label="estimate")
-            _mark_alarms(axis, data.get("/faults/alarm") or [])
-            axis.set_ylabel(f"{name} [%]", fontsize=8)
-            axis.legend(fontsize=8)
-        np.atleast_1d(axes)[-1].set_xlabel("simulation time [s]")
-        written.append(_save(figure, out / "estimates.png"))
-    if data.get("/faults/alarm"):
-        written.append(_alarms_figure(data["/faults/alarm"], data["/faults/seeded"],
-                                      out / "alarms.png"))
+        written.append(_residuals_figure(residuals, out / "residuals.png"))
+        written.append(_sensitivity_figure(residuals, out / "sensitivity.png"))
+    alarms = data.get("/faults/alarm") or []
+    if data["/faults/estimate"] and data["/faults/seeded"]:
+        written.append(_estimates_figure(data["/faults/estimate"], data["/faults/seeded"],
+                                         alarms, out / "estimates.png"))
+    if alarms:
+        written.append(_alarms_figure(alarms, data["/faults/seeded"], out / "alarms.png"))
     return written
+
+
+def _states_figure(state: list, path: Path) -> Path:
+    """Altitude [m], ground speed [m/s] and roll and pitch [deg] over sim time, from the
+    AircraftState messages."""
+    times = _stamps(state)
+    figure, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    axes[0].plot(times, [m.altitude_m for m in state])
+    axes[0].set_ylabel("altitude [m]")
+    speed = [math.hypot(m.velocity_north_mps, m.velocity_east_mps) for m in state]
+    axes[1].plot(times, speed)
+    axes[1].set_ylabel("ground speed [m/s]")
+    for name in ("roll", "pitch"):
+        axes[2].plot(times, np.degrees([getattr(m, f"{name}_rad") for m in state]),
+                     label=name)
+    axes[2].set_ylabel("attitude [deg]")
+    axes[2].legend()
+    axes[2].set_xlabel("simulation time [s]")
+    return _save(figure, path)
+
+
+def _track_figure(state: list, path: Path) -> Path:
+    """The ground track north over east [m] from the first AircraftState's position."""
+    north, east = north_east_m([m.latitude_rad for m in state],
+                               [m.longitude_rad for m in state],
+                               (state[0].latitude_rad, state[0].longitude_rad))
+    figure, axis = plt.subplots(figsize=(6, 6))
+    axis.plot(east, north)
+    axis.set_xlabel("east [m]")
+    axis.set_ylabel("north [m]")
+    axis.set_aspect("equal")
+    axis.set_title("ground track from the start")
+    return _save(figure, path)
+
+
+def _residuals_figure(residuals: list, path: Path) -> Path:
+    """Each of the six residual channels over sim time, from the Residuals messages."""
+    times = _stamps(residuals)
+    values = np.array([m.residual for m in residuals])
+    figure, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
+    for row, axis in enumerate(axes):
+        axis.plot(times, values[:, row])
+        axis.set_ylabel(RESIDUAL_LABELS[row], fontsize=8)
+    axes[-1].set_xlabel("simulation time [s]")
+    return _save(figure, path)
+
+
+def _sensitivity_figure(residuals: list, path: Path) -> Path:
+    """The first fault's sensitivity column (each channel per %) over sim time, from the
+    Residuals messages."""
+    times = _stamps(residuals)
+    names = list(residuals[0].fault_names)
+    column = np.array([np.reshape(m.sensitivity, (6, -1))[:, 0] for m in residuals])
+    figure, axes = plt.subplots(6, 1, figsize=(9, 10), sharex=True)
+    for row, axis in enumerate(axes):
+        axis.plot(times, column[:, row])
+        axis.set_ylabel(RESIDUAL_LABELS[row].replace("]", " per %]"), fontsize=8)
+    axes[0].set_title(f"sensitivity column: {names[0]}")
+    axes[-1].set_xlabel("simulation time [s]")
+    return _save(figure, path)
+
+
+def _estimates_figure(estimates: list, seeded: list, alarms: list, path: Path) -> Path:
+    """Each estimated fault [%] over sim time with its seeded value dashed (when seeded) and
+    the combined alarms shaded."""
+    names = list(estimates[0].names)
+    seeded_names = list(seeded[0].names)
+    values = np.array([m.values_pct for m in estimates])
+    truth = np.array([m.values_pct for m in seeded])
+    figure, axes = plt.subplots(len(names), 1, figsize=(9, 2.4 * len(names)), sharex=True)
+    for j, (name, axis) in enumerate(zip(names, np.atleast_1d(axes), strict=True)):
+        if name in seeded_names:
+            axis.plot(_stamps(seeded), truth[:, seeded_names.index(name)], "k--",
+                      label="seeded")
+        axis.plot(_stamps(estimates), values[:, j], label="estimate")
+        _mark_alarms(axis, alarms)
+        axis.set_ylabel(f"{name} [%]", fontsize=8)
+        axis.legend(fontsize=8)
+    np.atleast_1d(axes)[-1].set_xlabel("simulation time [s]")
+    return _save(figure, path)
 
 
 def _wind_triangle(state: list, air_data: list) -> tuple[np.ndarray, np.ndarray]:
