@@ -174,10 +174,11 @@ class Demo:
             while self.next_report_s <= progress.time_s:
                 self.next_report_s += PROGRESS_EVERY_S
 
-    def fly(self) -> tuple[int, list[str]]:
-        """Start the nodes, fly, wait for the estimates, stop the nodes: how many estimates
-        the demo's node received, and which nodes ended badly when stopped. NodeEndedError
-        when a node ends on its own, StalledError when nothing happens for too long."""
+    def fly(self) -> int:
+        """Start the nodes, fly, wait for the estimates: how many estimates the demo's node
+        received. The nodes still run afterwards, whatever happened: stop() them.
+        NodeEndedError when a node ends on its own, StalledError when nothing happens for
+        too long."""
         self.progress = progress = Progress()
         self.start("uav_fault_estimator", "recorder_node", ["-p", f"output_dir:={self.bag}"])
         if not self.watch(self.bag.exists, STARTUP_TIMEOUT_S):
@@ -211,7 +212,7 @@ class Demo:
                    finished=("sim_node",))
         self.report_progress(final=True)
         print(f"flown in {time.monotonic() - started:.1f} s of wall time", flush=True)
-        return progress.estimates, self.stop()
+        return progress.estimates
 
     def stop(self) -> list[str]:
         """Stop the demo's node and every node process still running (SIGINT to each group
@@ -296,31 +297,31 @@ def main() -> int:
     print(f"demo: scenario '{scenario.name}' ({scenario.path}), ROS domain {domain_id}, "
           f"output in {out}", flush=True)
     demo = Demo(scenario, out, mhe_params)
+    aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
-        received, failed = demo.fly()
+        received = demo.fly()
     except NodeEndedError as ended:
         print(f"demo: {ended.name} exited with {exit_status_text(ended.status)} during the "
               f"run (log: {demo.logs / (ended.name + '.log')}); stopping the other nodes",
               file=sys.stderr, flush=True)
-        _stop(demo)
-        _recorded(demo)
-        return 1
+        aborted = (1, True)
     except StalledError as stalled:
         print(f"demo: {stalled}; stopping the nodes (logs: {demo.logs})", file=sys.stderr,
               flush=True)
-        _stop(demo)
-        return 1
+        aborted = (1, False)
     except KeyboardInterrupt:
         print("\ndemo: interrupted: stopping the nodes", file=sys.stderr, flush=True)
-        _stop(demo)
-        _recorded(demo)
-        return 130
+        aborted = (130, True)
     finally:
-        _stop(demo)
+        # the one place the nodes are stopped, however the run ended
+        failed = _stop(demo)
         lock.close()
+    if aborted is not None:
+        status, show_recording = aborted
+        if show_recording:  # said after the stop: the recording is complete by then
+            _recorded(demo)
+        return status
 
-    for line in failed:
-        print(f"demo: {line}", file=sys.stderr)
     try:
         metrics, figures = write_report(demo.bag, out, scenario.name)
     except (ValueError, FileNotFoundError, ReaderError) as error:
@@ -339,12 +340,15 @@ def main() -> int:
     return 1 if failed or received < demo.expected else 0
 
 
-def _stop(demo: Demo) -> None:
-    """demo.stop(), not to be interrupted by a second Ctrl-C; says what ended badly."""
+def _stop(demo: Demo) -> list[str]:
+    """demo.stop(), not to be interrupted by a second Ctrl-C; says what ended badly, and
+    returns those lines."""
     previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in STOP_SIGNALS}
     try:
-        for line in demo.stop():
+        failed = demo.stop()
+        for line in failed:
             print(f"demo: {line}", file=sys.stderr)
+        return failed
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
