@@ -37,7 +37,6 @@ class WaypointGuidance:
         self.path_gain_perm = path_gain_perm
         self.course_gain = course_gain
         self.leg = 0
-        self.legs_completed = 0
 
     def _leg_points(self) -> tuple[np.ndarray, np.ndarray]:
         count = len(self.waypoints)
@@ -49,7 +48,6 @@ class WaypointGuidance:
         direction = (end - start) / np.linalg.norm(end - start)
         if np.dot(position_ne_m - end, direction) >= 0.0:
             self.leg = (self.leg + 1) % len(self.waypoints)
-            self.legs_completed += 1
             start, end = self._leg_points()
             direction = (end - start) / np.linalg.norm(end - start)
         leg_course = math.atan2(direction[1], direction[0])
