@@ -96,10 +96,13 @@ def test_seeded_faults_follow_the_scenario(default_scenario, default_flight):
     seeded = column(default_flight, "seeded_faults_pct")
     time_s = column(default_flight, "time_s")
     assert seeded[time_s < 50.0, 0].max() == 0.0
-    assert seeded[np.isclose(time_s, 70.0), 0] == pytest.approx(5.0)  # halfway up its ramp
+    # one sample at each of these times (measured); an empty selection would pass approx
+    halfway, before_step, at_step = (np.isclose(time_s, t) for t in (70.0, 109.95, 110.0))
+    assert halfway.sum() == before_step.sum() == at_step.sum() == 1
+    assert seeded[halfway, 0] == pytest.approx(5.0)  # halfway up its ramp
     assert seeded[-1, 0] == pytest.approx(10.0)
-    assert seeded[np.isclose(time_s, 109.95), 3] == 0.0
-    assert seeded[np.isclose(time_s, 110.0), 3] == pytest.approx(25.0)  # a step
+    assert seeded[before_step, 3] == 0.0
+    assert seeded[at_step, 3] == pytest.approx(25.0)  # a step
 
 
 def test_sensor_dropout_is_nan_for_its_duration(default_scenario):
