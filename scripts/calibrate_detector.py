@@ -23,9 +23,13 @@ import sys
 import time
 from pathlib import Path
 
-import yaml
 from ament_index_python.packages import get_package_share_directory
-from uav_fault_estimator.offline import describe_flights, fault_free_flights, fly_on_grid_each
+from uav_fault_estimator.offline import (
+    describe_flights,
+    fault_free_flights,
+    fly_on_grid_each,
+    write_calibration,
+)
 from uav_fault_estimator.recording import flight_from_recording, project_typestore
 from uav_fault_estimator.self_tuning import calibrate
 from uav_sim.paths import default_parameters
@@ -73,9 +77,8 @@ def main() -> int:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)
         return 1
     header += "# Valid for the sample period, forgetting factor and window below only.\n"
-    arguments.out.write_text(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
-    print(f"calibrated on {len(flights)} flights in {time.monotonic() - started:.1f} s: "
-          f"{arguments.out}")
+    write_calibration(arguments.out, header, calibration, f"{len(flights)} flights",
+                      time.monotonic() - started)
     return 0
 
 

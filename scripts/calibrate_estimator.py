@@ -21,7 +21,6 @@ import sys
 import time
 from pathlib import Path
 
-import yaml
 from uav_fault_estimator.noise_model import (
     AIR_DATA_ON_BOARD,
     CALIBRATION_FILE,
@@ -33,6 +32,7 @@ from uav_fault_estimator.offline import (
     each_in_processes,
     fault_free_flights,
     fault_free_residuals,
+    write_calibration,
 )
 from uav_sim.scenario import SensorSuite
 
@@ -56,9 +56,8 @@ def main() -> int:
     header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
               f"flights per sensor suite of\n# {describe_flights(base)}.\n"
               "# Valid for residual_node's default parameters.\n")
-    arguments.out.write_text(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
-    print(f"calibrated on {count} flights per suite in {time.monotonic() - started:.1f} s: "
-          f"{arguments.out}")
+    write_calibration(arguments.out, header, calibration, f"{count} flights per suite",
+                      time.monotonic() - started)
     return 0
 
 

@@ -163,3 +163,16 @@ def fault_free_flights(count: int, first_seed: int,
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
     return [wind_variant(base, first_seed + i, first_direction_deg + 360.0 * i / count,
                          5.0 + 0.25 * (i % 6)) for i in range(count)]
+
+
+def write_calibration(path: os.PathLike | str, header: str, calibration: Any,
+                      flights: str, seconds: float) -> None:
+    """Write a calibration file, the calibration scripts' output: header (its comment lines,
+    saying what it was made from), then calibration.to_dict() as YAML in the calibration's
+    own key order; and say on stdout that it was made on `flights` ("12 flights") in
+    `seconds` of wall time [s]."""
+    import yaml  # only the calibration scripts need it, not the rest of the module
+
+    with open(path, "w") as stream:
+        stream.write(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
+    print(f"calibrated on {flights} in {seconds:.1f} s: {path}")
