@@ -29,15 +29,15 @@ import numpy as np
 import osqp
 import quadprog
 import scipy.sparse as sp
-from uav_fault_estimator.estimator_config import (
+from uav_fault_estimator.analysis.offline import PACKAGE
+from uav_fault_estimator.estimation.estimator_config import (
     EstimatorConfig,
     config_from_parameters,
 )
-from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.offline import PACKAGE
-from uav_fault_estimator.prediction import residual_generator
-from uav_fault_estimator.qp_problem import WindowQP
-from uav_fault_estimator.reference_qp import clarabel_form, solve_reference
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.qp_problem import WindowQP
+from uav_fault_estimator.estimation.reference_qp import clarabel_form, solve_reference
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.paths import default_parameters
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario

@@ -16,8 +16,8 @@ import argparse
 import time
 
 import numpy as np
-from uav_fault_estimator.offline import PACKAGE
-from uav_fault_estimator.prediction import residual_generator
+from uav_fault_estimator.analysis.offline import PACKAGE
+from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_sim.paths import default_parameters
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation

@@ -24,14 +24,14 @@ import time
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
-from uav_fault_estimator.offline import (
+from uav_fault_estimator.analysis.offline import (
     describe_flights,
     fault_free_flights,
     fly_on_grid_each,
     write_calibration,
 )
-from uav_fault_estimator.recording import flight_from_recording, project_typestore
-from uav_fault_estimator.self_tuning import calibrate
+from uav_fault_estimator.analysis.recording import flight_from_recording, project_typestore
+from uav_fault_estimator.detection.self_tuning import calibrate
 from uav_sim.paths import default_parameters
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"

@@ -21,18 +21,18 @@ import sys
 import time
 from pathlib import Path
 
-from uav_fault_estimator.noise_model import (
-    AIR_DATA_ON_BOARD,
-    CALIBRATION_FILE,
-    SUITES,
-    fit_noise,
-)
-from uav_fault_estimator.offline import (
+from uav_fault_estimator.analysis.offline import (
     describe_flights,
     each_in_processes,
     fault_free_flights,
     fault_free_residuals,
     write_calibration,
+)
+from uav_fault_estimator.estimation.noise_model import (
+    AIR_DATA_ON_BOARD,
+    CALIBRATION_FILE,
+    SUITES,
+    fit_noise,
 )
 from uav_sim.scenario import SensorSuite
 

@@ -41,9 +41,9 @@ from ros_processes import (
     stop_all,
 )
 from rosbags.rosbag2 import ReaderError
-from uav_fault_estimator.report import residual_update_period_s, table
-from uav_sim.messages import stamp_seconds
+from uav_fault_estimator.analysis.report import residual_update_period_s, table
 from uav_sim.paths import default_parameters
+from uav_sim.ros.messages import stamp_seconds
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -78,7 +78,7 @@ class Progress:
         from rclpy.signals import SignalHandlerOptions
         from rosgraph_msgs.msg import Clock
         from uav_fault_msgs.msg import FaultEstimate
-        from uav_sim.node_tools import STREAM_QOS
+        from uav_sim.ros.node_tools import STREAM_QOS
 
         self._rclpy = rclpy
         self.context = rclpy.Context()

@@ -7,7 +7,7 @@ For each sensor suite (the paper's 10 s filtered wind only; air data on board) a
 turbulence (none, from_wind, light, moderate), flies `--seeds` variants of the shipped
 default and fault_free scenarios (turbulence and noise seeds from 401, background winds of
 5-6 m/s towards directions 360/seeds degrees apart) through the offline chain
-(uav_fault_estimator.offline: the nodes' default parameters, the calibrated noise of the
+(uav_fault_estimator.analysis.offline: the nodes' default parameters, the calibrated noise of the
 suite) and prints, per fault:
 
 - fault-free: the largest estimate after settle_s over all flights, i.e. the smallest
@@ -29,10 +29,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from uav_fault_estimator.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
-from uav_fault_estimator.metrics import SETTLE_S, fault_metrics
-from uav_fault_estimator.noise_model import AIR_DATA_ON_BOARD
-from uav_fault_estimator.offline import each_in_processes, fly_and_estimate, wind_variant
+from uav_fault_estimator.analysis.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.analysis.metrics import SETTLE_S, fault_metrics
+from uav_fault_estimator.analysis.offline import each_in_processes, fly_and_estimate, wind_variant
+from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.scenario import Scenario, SensorSuite, default_scenario_path, load_scenario
 

@@ -16,8 +16,8 @@ import sys
 from pathlib import Path
 
 from ament_index_python.packages import get_package_share_directory
-from uav_fault_estimator import figures, report
-from uav_fault_estimator.recording import project_typestore, read_topics
+from uav_fault_estimator.analysis import figures, report
+from uav_fault_estimator.analysis.recording import project_typestore, read_topics
 
 
 def write_report(bag: Path, out: Path, scenario: str) -> tuple[dict, list[Path]]:

@@ -19,8 +19,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from uav_fault_estimator.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
-from uav_fault_estimator.self_tuning import CHANNELS, Calibration, load_calibration, run_detector
+from uav_fault_estimator.analysis.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
+from uav_fault_estimator.detection.self_tuning import (
+    CHANNELS,
+    Calibration,
+    load_calibration,
+    run_detector,
+)
 from uav_sim.paths import default_parameters, scenarios_dir
 from uav_sim.scenario import load_scenario
 

@@ -9,15 +9,15 @@ import math
 import numpy as np
 import pytest
 from scipy import stats
-from uav_fault_estimator.change_detection import (
+from uav_fault_estimator.detection.change_detection import (
     SlidingGlrt,
     Weibull,
     laplacian_glrt,
     weibull_fit,
     weibull_threshold,
 )
-from uav_fault_estimator.rls import RecursiveLeastSquares
-from uav_fault_estimator.self_tuning import (
+from uav_fault_estimator.detection.rls import RecursiveLeastSquares
+from uav_fault_estimator.detection.self_tuning import (
     CHANNELS,
     Calibration,
     ChannelCalibration,

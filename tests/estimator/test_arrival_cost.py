@@ -8,10 +8,14 @@ import math
 
 import numpy as np
 import pytest
-from uav_fault_estimator.arrival_cost import ArrivalCost, increment_prior
-from uav_fault_estimator.estimator_config import EstimatorConfig, FaultConfig, SolverSettings
-from uav_fault_estimator.fault_models import Monotonic, RandomWalk
-from uav_fault_estimator.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.arrival_cost import ArrivalCost, increment_prior
+from uav_fault_estimator.estimation.estimator_config import (
+    EstimatorConfig,
+    FaultConfig,
+    SolverSettings,
+)
+from uav_fault_estimator.estimation.fault_models import Monotonic, RandomWalk
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
 
 HORIZON, CHANNELS, UPDATES = 8, 6, 60
 SIGMAS = (0.3, 0.2, 0.5)

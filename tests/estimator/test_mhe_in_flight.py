@@ -13,9 +13,9 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
-from uav_fault_estimator.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
-from uav_fault_estimator.metrics import SETTLE_S, fault_metrics
-from uav_fault_estimator.offline import fly_and_estimate
+from uav_fault_estimator.analysis.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.analysis.metrics import SETTLE_S, fault_metrics
+from uav_fault_estimator.analysis.offline import fly_and_estimate
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uav_fault_estimator.estimator_config import EstimatorConfig, FaultConfig
-from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig, FaultConfig
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 NOISE_SD = np.array([0.05, 0.05, 0.05, 0.01, 0.01, 0.01])
 SAMPLES, FAULTS = 120, 2

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from uav_fault_estimator.estimator_config import EstimatorConfig
-from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.noise_model import load_noise_calibration, shipped_noise_path
-from uav_fault_estimator.residuals import WIND_AIR_DATA, WIND_FILTERED
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.noise_model import load_noise_calibration, shipped_noise_path
+from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uav_fault_estimator.batch import BatchEstimator
-from uav_fault_estimator.estimator_config import EstimatorConfig, FaultConfig
-from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.batch import BatchEstimator
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig, FaultConfig
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 DT_S = 0.1
 CYCLE_S = 15.0

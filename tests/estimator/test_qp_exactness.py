@@ -6,18 +6,18 @@ import math
 
 import numpy as np
 import pytest
-from uav_fault_estimator.estimator_config import SolverSettings
-from uav_fault_estimator.fault_models import (
+from uav_fault_estimator.estimation.estimator_config import SolverSettings
+from uav_fault_estimator.estimation.fault_models import (
     Constant,
     LaplacianIncrements,
     Monotonic,
     RandomWalk,
     UniformIncrements,
 )
-from uav_fault_estimator.proxqp_solver import ProxQPSolver
-from uav_fault_estimator.qp_problem import WindowQP, stage_normal_equations
-from uav_fault_estimator.reference_qp import solve_reference
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
+from uav_fault_estimator.estimation.qp_problem import WindowQP, stage_normal_equations
+from uav_fault_estimator.estimation.reference_qp import solve_reference
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 TIGHT = SolverSettings(eps_abs=1e-9, eps_rel=0.0, max_iter=10_000)
 FREE = (-math.inf, math.inf)

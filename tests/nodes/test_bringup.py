@@ -11,7 +11,7 @@ import pytest
 from helpers.process_table import NODE_NAMES, kill_all, processes
 from ros_processes import wait_until
 from uav_fault_msgs.msg import FaultEstimate
-from uav_sim.node_tools import STREAM_QOS
+from uav_sim.ros.node_tools import STREAM_QOS
 
 pytestmark = pytest.mark.integration
 

@@ -15,9 +15,9 @@ import yaml
 from ament_index_python.packages import get_package_share_directory
 from helpers.process_table import kill_all, nodes_logging_under
 from ros_processes import RosProcess, wait_until
-from uav_fault_estimator import report
-from uav_fault_estimator.offline import fly_and_estimate
-from uav_fault_estimator.recording import project_typestore, read_topics
+from uav_fault_estimator.analysis import report
+from uav_fault_estimator.analysis.offline import fly_and_estimate
+from uav_fault_estimator.analysis.recording import project_typestore, read_topics
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario

@@ -9,16 +9,16 @@ import subprocess
 import numpy as np
 import pytest
 from ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.offline import fly_on_grid
-from uav_fault_estimator.self_tuning import (
+from uav_fault_estimator.analysis.offline import fly_on_grid
+from uav_fault_estimator.detection.self_tuning import (
     CHANNELS,
     SelfTuningDetector,
     load_calibration,
     run_detector,
 )
 from uav_fault_msgs.msg import FaultAlarm
-from uav_sim.messages import stamp_seconds
-from uav_sim.node_tools import STREAM_QOS
+from uav_sim.ros.messages import stamp_seconds
+from uav_sim.ros.node_tools import STREAM_QOS
 from uav_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.integration

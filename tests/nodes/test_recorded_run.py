@@ -14,17 +14,17 @@ import pytest
 import yaml
 from ament_index_python.packages import get_package_share_directory
 from ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
-from uav_fault_estimator import figures, report
-from uav_fault_estimator.offline import fly_on_grid
-from uav_fault_estimator.recording import (
+from uav_fault_estimator.analysis import figures, report
+from uav_fault_estimator.analysis.offline import fly_on_grid
+from uav_fault_estimator.analysis.recording import (
     flight_from_recording,
     project_typestore,
     read_topics,
 )
-from uav_fault_estimator.self_tuning import Calibration
+from uav_fault_estimator.detection.self_tuning import Calibration
 from uav_fault_msgs.msg import FaultEstimate
 from uav_sim.channels import PAPER_FAULT_NAMES
-from uav_sim.node_tools import STREAM_QOS
+from uav_sim.ros.node_tools import STREAM_QOS
 from uav_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.integration

@@ -11,7 +11,7 @@ import pytest
 from ament_index_python.packages import get_package_share_directory
 from ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from rosbags.rosbag2 import Reader
-from uav_fault_estimator.recording import project_typestore
+from uav_fault_estimator.analysis.recording import project_typestore
 
 pytestmark = pytest.mark.integration
 

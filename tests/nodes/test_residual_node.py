@@ -11,8 +11,8 @@ from diagnostic_msgs.msg import DiagnosticArray
 from ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_msgs.msg import Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
-from uav_sim.messages import stamp_seconds
-from uav_sim.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+from uav_sim.ros.messages import stamp_seconds
+from uav_sim.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 
 pytestmark = pytest.mark.integration
 

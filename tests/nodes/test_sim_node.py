@@ -10,8 +10,8 @@ from geometry_msgs.msg import Vector3Stamped
 from ros_processes import ros2_run_argv
 from rosgraph_msgs.msg import Clock
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
-from uav_sim.messages import stamp_seconds
-from uav_sim.node_tools import STREAM_QOS
+from uav_sim.ros.messages import stamp_seconds
+from uav_sim.ros.node_tools import STREAM_QOS
 
 pytestmark = pytest.mark.integration
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uav_fault_estimator.metrics import (
+from uav_fault_estimator.analysis.metrics import (
     AlarmSeries,
     EstimateSeries,
     SeededSeries,

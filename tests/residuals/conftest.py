@@ -7,8 +7,8 @@ from collections.abc import Callable
 
 import pytest
 from helpers.flights import calm, fly
-from uav_fault_estimator.prediction import aircraft_predictor_factory
-from uav_fault_estimator.residuals import ResidualGenerator, ResidualSample
+from uav_fault_estimator.estimation.prediction import aircraft_predictor_factory
+from uav_fault_estimator.estimation.residuals import ResidualGenerator, ResidualSample
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.scenario import SeededFault, default_scenario_path, load_scenario
 

@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 import pytest
-from uav_fault_estimator.residuals import ResidualGenerator
-from uav_fault_estimator.stamp_matching import StampMatcher
+from uav_fault_estimator.estimation.residuals import ResidualGenerator
+from uav_fault_estimator.nodes.stamp_matching import StampMatcher
 from uav_sim.channels import STATE_CHANNELS
 from uav_sim.filters import LowPass
 

@@ -20,7 +20,7 @@ import pytest
 from helpers.flights import turbulence_met
 from scipy.linalg import solve_continuous_lyapunov
 from scipy.signal import welch
-from uav_fault_estimator.offline import each_in_processes
+from uav_fault_estimator.analysis.offline import each_in_processes
 from uav_sim.aircraft import M_PER_FT
 from uav_sim.turbulence import (
     VonKarmanTurbulence,

@@ -25,10 +25,10 @@ setup(
     license="Apache-2.0",
     entry_points={
         "console_scripts": [
-            f"residual_node = {PACKAGE}.residual_node:main",
-            f"mhe_node = {PACKAGE}.mhe_node:main",
-            f"recorder_node = {PACKAGE}.recorder_node:main",
-            f"detector_node = {PACKAGE}.detector_node:main",
+            f"residual_node = {PACKAGE}.nodes.residual_node:main",
+            f"mhe_node = {PACKAGE}.nodes.mhe_node:main",
+            f"recorder_node = {PACKAGE}.nodes.recorder_node:main",
+            f"detector_node = {PACKAGE}.nodes.detector_node:main",
         ],
     },
 )

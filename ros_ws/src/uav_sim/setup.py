@@ -35,5 +35,5 @@ setup(
     maintainer_email="maintainers@uav-fault-diagnostics.example.org",
     description="Aerosonde UAV flight simulation on JSBSim with seeded faults.",
     license="Apache-2.0",
-    entry_points={"console_scripts": [f"sim_node = {PACKAGE}.sim_node:main"]},
+    entry_points={"console_scripts": [f"sim_node = {PACKAGE}.ros.sim_node:main"]},
 )

@@ -19,9 +19,9 @@ import numpy as np
 import scipy.sparse as sp
 from proxsuite import proxqp
 
-from uav_fault_estimator.estimator_config import SolverSettings
-from uav_fault_estimator.qp_problem import WindowQP
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.estimator_config import SolverSettings
+from uav_fault_estimator.estimation.qp_problem import WindowQP
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 WARM_START_MU_IN = 1e-5
 ITERATIVE_REFINEMENT_STEPS = 2

@@ -15,9 +15,9 @@ from pathlib import Path
 from ament_index_python.packages import get_package_share_directory
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from uav_sim.node_tools import declare_parameters, run_node
+from uav_sim.ros.node_tools import declare_parameters, run_node
 
-from uav_fault_estimator.recording import Recording, project_typestore
+from uav_fault_estimator.analysis.recording import Recording, project_typestore
 
 PARAMETERS = {
     "output_dir": "the rosbag2 directory to create (it must not exist yet)",

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from uav_fault_estimator.fault_models import FaultModel, IncrementTerms
+from uav_fault_estimator.estimation.fault_models import FaultModel, IncrementTerms
 
 
 def stage_normal_equations(

@@ -16,7 +16,7 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
-from uav_fault_estimator.qp_problem import WindowQP
+from uav_fault_estimator.estimation.qp_problem import WindowQP
 
 ACTIVE_SLACK = 1e-7
 FEASIBILITY_TOLERANCE = 1e-9

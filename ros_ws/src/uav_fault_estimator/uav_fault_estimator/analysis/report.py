@@ -7,10 +7,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from uav_sim.messages import stamp_seconds
 from uav_sim.paths import default_parameters
+from uav_sim.ros.messages import stamp_seconds
 
-from uav_fault_estimator.metrics import (
+from uav_fault_estimator.analysis.metrics import (
     DETECTION_THRESHOLD_PCT,
     SETTLE_S,
     AlarmSeries,
@@ -20,7 +20,7 @@ from uav_fault_estimator.metrics import (
     fault_metrics,
     solver_metrics,
 )
-from uav_fault_estimator.recording import RECEIVED_NS
+from uav_fault_estimator.analysis.recording import RECEIVED_NS
 
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"

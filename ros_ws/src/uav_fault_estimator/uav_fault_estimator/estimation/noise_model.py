@@ -21,7 +21,7 @@ import numpy as np
 import yaml
 from uav_sim.paths import config_path
 
-from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
+from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 
 SUITES = {WIND_AIR_DATA: "air_data", WIND_FILTERED: "filtered_wind"}
 # suite name -> whether the aircraft has air data on board (scenario sensors.air_data)

@@ -13,10 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uav_fault_estimator.estimator_config import EstimatorConfig
-from uav_fault_estimator.proxqp_solver import ProxQPSolver
-from uav_fault_estimator.qp_problem import sample_normal_equations
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
+from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
+from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,8 @@ import sys
 
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultAlarm
-from uav_sim.messages import controls_array, header, state_array
-from uav_sim.node_tools import (
+from uav_sim.ros.messages import controls_array, header, state_array
+from uav_sim.ros.node_tools import (
     ERROR,
     OK,
     STREAM_QOS,
@@ -23,13 +23,13 @@ from uav_sim.node_tools import (
     run_node,
 )
 
-from uav_fault_estimator.matched_streams import MatchedStreams
-from uav_fault_estimator.self_tuning import (
+from uav_fault_estimator.detection.self_tuning import (
     CHANNELS,
     DetectorSample,
     SelfTuningDetector,
     load_calibration,
 )
+from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
     "calibration_file": "detector calibration YAML; empty: the package's "

@@ -13,8 +13,8 @@ import time
 
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
-from uav_sim.messages import air_data_array, controls_array, header, state_array, wind_array
-from uav_sim.node_tools import (
+from uav_sim.ros.messages import air_data_array, controls_array, header, state_array, wind_array
+from uav_sim.ros.node_tools import (
     OK,
     STREAM_QOS,
     WARN,
@@ -24,9 +24,13 @@ from uav_sim.node_tools import (
 )
 from uav_sim.sample_grid import GRID_TOLERANCE_S, next_grid_time
 
-from uav_fault_estimator.matched_streams import MatchedStreams
-from uav_fault_estimator.prediction import residual_generator
-from uav_fault_estimator.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, ResidualSample
+from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.residuals import (
+    RESIDUAL_CHANNELS,
+    WIND_AIR_DATA,
+    ResidualSample,
+)
+from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
     "fault_names": "faults whose sensitivities are computed: the columns of S",

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
-from uav_fault_estimator.fault_models import IncrementTerms
+from uav_fault_estimator.estimation.fault_models import IncrementTerms
 
 
 def increment_prior(terms: IncrementTerms) -> tuple[float, float]:

@@ -31,13 +31,13 @@ from uav_sim.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_sim.paths import config_path
 from uav_sim.sample_grid import on_grid
 
-from uav_fault_estimator.change_detection import (
+from uav_fault_estimator.detection.change_detection import (
     SlidingGlrt,
     Weibull,
     weibull_fit,
     weibull_threshold,
 )
-from uav_fault_estimator.rls import RecursiveLeastSquares
+from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 
 CHANNELS = ("roll", "pitch", "yaw")
 PARAMETER_NAMES = {

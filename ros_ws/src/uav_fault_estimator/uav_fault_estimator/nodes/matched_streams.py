@@ -7,10 +7,10 @@ from collections.abc import Callable
 from typing import Any
 
 from rclpy.node import Node
-from uav_sim.messages import stamp_nanoseconds
-from uav_sim.node_tools import STREAM_QOS
+from uav_sim.ros.messages import stamp_nanoseconds
+from uav_sim.ros.node_tools import STREAM_QOS
 
-from uav_fault_estimator.stamp_matching import StampMatcher
+from uav_fault_estimator.nodes.stamp_matching import StampMatcher
 
 # (message type, message -> array) per topic
 Streams = dict[str, tuple[type, Callable[[Any], Any]]]

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uav_fault_estimator.arrival_cost import ArrivalCost, increment_prior
-from uav_fault_estimator.estimator_config import EstimatorConfig
-from uav_fault_estimator.proxqp_solver import ProxQPSolver, SolveOutcome
-from uav_fault_estimator.qp_problem import sample_normal_equations
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.arrival_cost import ArrivalCost, increment_prior
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
+from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver, SolveOutcome
+from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 
 @dataclass

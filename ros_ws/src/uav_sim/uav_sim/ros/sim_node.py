@@ -22,7 +22,7 @@ from rosgraph_msgs.msg import Clock
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 
 from uav_sim.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
-from uav_sim.messages import (
+from uav_sim.ros.messages import (
     air_data_message,
     controls_message,
     fault_vector_message,
@@ -31,7 +31,7 @@ from uav_sim.messages import (
     true_wind_message,
     wind_message,
 )
-from uav_sim.node_tools import (
+from uav_sim.ros.node_tools import (
     CLOCK_QOS,
     OK,
     STREAM_QOS,

@@ -14,7 +14,7 @@ import numpy as np
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
-from uav_sim.messages import controls_array, stamp_nanoseconds, stamp_seconds, state_array
+from uav_sim.ros.messages import controls_array, stamp_nanoseconds, stamp_seconds, state_array
 from uav_sim.sample_grid import on_grid
 
 

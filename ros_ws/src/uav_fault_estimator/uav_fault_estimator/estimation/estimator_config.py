@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 from uav_sim.channels import PAPER_FAULT_NAMES
 
-from uav_fault_estimator.fault_models import SCALE_PARAMETER, FaultModel, make_model
-from uav_fault_estimator.noise_model import NoiseCalibration, load_noise_calibration
-from uav_fault_estimator.qp_problem import WindowQP
-from uav_fault_estimator.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
+from uav_fault_estimator.estimation.fault_models import SCALE_PARAMETER, FaultModel, make_model
+from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
+from uav_fault_estimator.estimation.qp_problem import WindowQP
+from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
 
 ARRIVAL_CENTRES = ("filter", "previous_window")
 

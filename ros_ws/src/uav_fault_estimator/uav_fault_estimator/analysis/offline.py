@@ -21,11 +21,14 @@ from uav_sim.sample_grid import on_grid
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
-from uav_fault_estimator.estimator_config import config_from_parameters, noise_calibration
-from uav_fault_estimator.metrics import EstimateSeries, SeededSeries
-from uav_fault_estimator.mhe import MovingHorizonEstimator
-from uav_fault_estimator.prediction import residual_generator
-from uav_fault_estimator.residuals import RESIDUAL_CHANNELS
+from uav_fault_estimator.analysis.metrics import EstimateSeries, SeededSeries
+from uav_fault_estimator.estimation.estimator_config import (
+    config_from_parameters,
+    noise_calibration,
+)
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 
 PACKAGE = "uav_fault_estimator"
 

@@ -12,8 +12,8 @@ from collections import deque
 import numpy as np
 from rclpy.node import Node
 from uav_fault_msgs.msg import FaultEstimate, Residuals
-from uav_sim.messages import header, stamp_seconds
-from uav_sim.node_tools import (
+from uav_sim.ros.messages import header, stamp_seconds
+from uav_sim.ros.node_tools import (
     ERROR,
     OK,
     STREAM_QOS,
@@ -23,9 +23,12 @@ from uav_sim.node_tools import (
     run_node,
 )
 
-from uav_fault_estimator.estimator_config import config_from_parameters, noise_calibration
-from uav_fault_estimator.mhe import EstimateResult, MovingHorizonEstimator
-from uav_fault_estimator.solve_status import SolveStatus
+from uav_fault_estimator.estimation.estimator_config import (
+    config_from_parameters,
+    noise_calibration,
+)
+from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 PARAMETERS = {
     "fault_names": "the estimated faults: columns of the residuals' S, by name",

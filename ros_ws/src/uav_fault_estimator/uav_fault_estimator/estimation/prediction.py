@@ -48,7 +48,7 @@ from uav_sim.channels import CONTROL_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
 
-from uav_fault_estimator.residuals import PredictorFactory, ResidualGenerator
+from uav_fault_estimator.estimation.residuals import PredictorFactory, ResidualGenerator
 
 _STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
 _CONTROL = {name: index for index, name in enumerate(CONTROL_CHANNELS)}
