@@ -30,6 +30,7 @@ import osqp
 import quadprog
 import scipy.sparse as sp
 from uav_fault_estimator.analysis.offline import PACKAGE
+from uav_fault_estimator.analysis.report import residual_update_period_s
 from uav_fault_estimator.estimation.estimator_config import (
     EstimatorConfig,
     config_from_parameters,
@@ -43,7 +44,7 @@ from uav_sim.paths import default_parameters
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
-UPDATE_PERIOD_S = 0.5
+UPDATE_PERIOD_S = residual_update_period_s()  # residual_node's, as the node publishes
 EPS = 1e-6  # absolute tolerance asked of every iterative solver
 
 

@@ -23,7 +23,6 @@ import sys
 import time
 from pathlib import Path
 
-from ament_index_python.packages import get_package_share_directory
 from uav_fault_estimator.analysis.offline import (
     describe_flights,
     fault_free_flights,
@@ -51,8 +50,7 @@ def simulated(count: int) -> tuple[list, str]:
 
 def recorded(bags: list[Path]) -> tuple[list, str]:
     """The flights of recordings, and the calibration file's header naming them."""
-    typestore = project_typestore(
-        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    typestore = project_typestore()
     flights = [flight_from_recording(bag, typestore, SAMPLE_PERIOD_S) for bag in bags]
     header = ("# Written by scripts/calibrate_detector.py from the recordings "
               + ", ".join(str(bag) for bag in bags) + ".\n")

@@ -15,7 +15,6 @@ import json
 import sys
 from pathlib import Path
 
-from ament_index_python.packages import get_package_share_directory
 from uav_fault_estimator.analysis import figures, report
 from uav_fault_estimator.analysis.recording import project_typestore, read_topics
 
@@ -25,8 +24,7 @@ def write_report(bag: Path, out: Path, scenario: str) -> tuple[dict, list[Path]]
 
     ValueError or FileNotFoundError (naming the bag) when the recording lacks a stream.
     """
-    typestore = project_typestore(
-        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    typestore = project_typestore()
     # one pass over the recording for the metrics and the figures
     messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS))
     metrics = report.run_metrics(report.run_from(messages, bag), scenario)

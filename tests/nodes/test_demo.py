@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from ament_index_python.packages import get_package_share_directory
 from helpers.process_table import kill_all, nodes_logging_under
 from ros_processes import RosProcess, wait_until
 from uav_fault_estimator.analysis import report
@@ -121,8 +120,7 @@ def test_a_node_dying_mid_run_ends_the_demo_with_its_name(
     print(output)
     assert "residual_node exited with status -9" in output
     assert not nodes_logging_under(run_dir)
-    typestore = project_typestore(
-        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    typestore = project_typestore()
     states = read_topics(run_dir / "bag", typestore, ("/state",))["/state"]
     assert len(states) >= 20 * 20  # at least the 20 s flown before the kill, at 20 Hz
 
@@ -139,8 +137,7 @@ def test_a_two_fault_flight_gives_its_metrics(start_process, short_scenario, run
     assert "right_wing_lift_loss" in output and "pipeline: 240/240 estimates" in output
     metrics = check_metrics(run_dir)
 
-    typestore = project_typestore(
-        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    typestore = project_typestore()
     flown = report.run_from(read_topics(run_dir / "bag", typestore, report.TOPICS),
                             run_dir / "bag").estimates
     offline, _ = fly_and_estimate(load_scenario(scenario))

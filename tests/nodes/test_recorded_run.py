@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from ament_index_python.packages import get_package_share_directory
 from ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_estimator.analysis import figures, report
 from uav_fault_estimator.analysis.offline import fly_on_grid
@@ -52,8 +51,7 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
         scenario, subscribers=2)), "sim_node")  # residual_node and the recorder
     assert sim.wait(timeout_s=90) == 0, sim.output()
     expected = round(DURATION_S / 0.5)
-    typestore = project_typestore(
-        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    typestore = project_typestore()
 
     # the last estimates may still be on their way when the simulator ends
     graph.spin(30.0, until=lambda: len(estimates) >= expected)

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import signal
 import subprocess
-from pathlib import Path
 
 import pytest
-from ament_index_python.packages import get_package_share_directory
 from ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from rosbags.rosbag2 import Reader
 from uav_fault_estimator.analysis.recording import project_typestore
@@ -31,8 +29,7 @@ def test_every_stream_message_is_recorded_and_readable(short_scenario, start_pro
     assert sim.wait(timeout_s=60) == 0, sim.output()
     assert recorder.stop(signal.SIGINT) == 0, recorder.output()
 
-    typestore = project_typestore(
-        [Path(get_package_share_directory("uav_fault_msgs")) / "msg"])
+    typestore = project_typestore()
     counts: dict[str, int] = {}
     with Reader(bag) as reader:
         for connection, _, raw in reader.messages():

@@ -8,23 +8,26 @@ from their .msg definitions; the standard ones come with rosbags' ROS 2 Jazzy ty
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
+from uav_sim.paths import share_dir
 from uav_sim.ros.messages import controls_array, stamp_nanoseconds, stamp_seconds, state_array
 from uav_sim.sample_grid import on_grid
 
+MESSAGE_PACKAGES = ("uav_fault_msgs",)  # the project's own message types
 
-def project_typestore(message_dirs: list[Path]) -> Typestore:
-    """ROS 2 Jazzy's standard types plus every .msg found in message_dirs
-    (each `<package>/msg`)."""
+
+def project_typestore(message_packages: Sequence[str] = MESSAGE_PACKAGES) -> Typestore:
+    """ROS 2 Jazzy's standard types plus every .msg of the message packages (their
+    installed share folders, or the source tree's)."""
     typestore = get_typestore(Stores.ROS2_JAZZY)
-    for folder in message_dirs:
-        package = folder.parent.name
-        for definition in sorted(folder.glob("*.msg")):
+    for package in message_packages:
+        for definition in sorted((share_dir(package) / "msg").glob("*.msg")):
             typestore.register(get_types_from_msg(
                 definition.read_text(), f"{package}/msg/{definition.stem}"))
     return typestore

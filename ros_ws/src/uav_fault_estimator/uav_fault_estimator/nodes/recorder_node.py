@@ -12,7 +12,6 @@ import importlib
 import sys
 from pathlib import Path
 
-from ament_index_python.packages import get_package_share_directory
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from uav_sim.ros.node_tools import declare_parameters, run_node
@@ -23,7 +22,6 @@ PARAMETERS = {
     "output_dir": "the rosbag2 directory to create (it must not exist yet)",
     "discovery_period_s": "how often new topics are looked for [s, wall time]",
 }
-MESSAGE_PACKAGES = ("uav_fault_msgs",)
 
 
 def message_class(type_name: str) -> type:
@@ -50,9 +48,7 @@ class RecorderNode(Node):
         output = Path(self.parameters["output_dir"])
         if not self.parameters["output_dir"] or output.exists():
             raise ValueError(f"output_dir '{output}' must be given and must not exist")
-        message_dirs = [Path(get_package_share_directory(package)) / "msg"
-                        for package in MESSAGE_PACKAGES]
-        self.recording = Recording(output, project_typestore(message_dirs))
+        self.recording = Recording(output, project_typestore())
         self.create_timer(self.parameters["discovery_period_s"], self.discover)
         self.discover()
 
