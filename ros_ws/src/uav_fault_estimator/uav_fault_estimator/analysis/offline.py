@@ -15,6 +15,7 @@ from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 import numpy as np
+import yaml
 from uav_sim.channels import FAULT_NAMES
 from uav_sim.paths import default_parameters
 from uav_sim.sample_grid import on_grid
@@ -174,8 +175,6 @@ def write_calibration(path: os.PathLike | str, header: str, calibration: Any,
     saying what it was made from), then calibration.to_dict() as YAML in the calibration's
     own key order; and say on stdout that it was made on `flights` ("12 flights") in
     `seconds` of wall time [s]."""
-    import yaml  # only the calibration scripts need it, not the rest of the module
-
     with open(path, "w") as stream:
         stream.write(header + yaml.safe_dump(calibration.to_dict(), sort_keys=False))
     print(f"calibrated on {flights} in {seconds:.1f} s: {path}")
