@@ -12,9 +12,15 @@ runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures 
 (each node's output, <node>.log). The scenario's `estimator:` mapping overrides mhe_node's
 parameters.
 
+The demo writes only into an output folder of its own: one it creates (or finds empty) and
+marks with the file .uav-demo-run. A run into a marked folder replaces the bag/ and logs/ of
+the earlier one; a folder that exists, is not empty and has no mark is refused, as is an
+--out that is a file or cannot be written.
+
 Exit status: 0 done; 1 a node ended on its own during the run (its name and exit status are
-printed; the recording so far is left readable) or the report failed; 2 a bad argument or
-scenario (one line, before any process starts); 130 interrupted (Ctrl-C, SIGTERM).
+printed; the recording so far is left readable) or the report failed; 2 a bad argument,
+scenario or output folder (one line, before any process starts); 130 interrupted (Ctrl-C,
+SIGTERM).
 """
 
 from __future__ import annotations
@@ -40,7 +46,6 @@ from ros_processes import (
     ros2_run_argv,
     stop_all,
 )
-from rosbags.rosbag2 import ReaderError
 from uav_fault_estimator.analysis.report import residual_update_period_s, table
 from uav_sim.paths import default_parameters
 from uav_sim.ros.messages import stamp_seconds
@@ -54,6 +59,12 @@ ESTIMATES_TIMEOUT_S = 30.0  # wall time for the last estimates after the simulat
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 STATE_SUBSCRIBERS = 3  # residual_node, detector_node and the recorder
 RECORDER_GRACE_S = 1.0  # for the recorder to take the last estimates, as this node did
+OUTPUT_MARK = ".uav-demo-run"  # in an output folder the demo made: its bag/ and logs/ are its own
+REPLACED = ("bag", "logs")  # what a run replaces of an earlier one in the same folder
+
+
+class OutputFolderError(Exception):
+    """An output folder the demo may not or cannot write into (one line: which, what to do)."""
 
 
 class NodeEndedError(Exception):
@@ -226,6 +237,44 @@ class Demo:
                 for name, status in zip(running, statuses, strict=True) if status != 0]
 
 
+def prepare_output(out: Path, scenario_path: Path) -> None:
+    """Make out the run's output folder: create it and mark it (OUTPUT_MARK), or take a
+    marked one and remove the earlier run's bag/ and logs/. OutputFolderError, with nothing
+    removed, for a file, a folder that is not empty and not marked, a bag/ or logs/ that is
+    not a plain folder, the scenario inside what would be removed, or a place that cannot be
+    written."""
+    what_to_do = "choose another --out (a new or empty folder)"
+    if out.exists() and not out.is_dir():
+        raise OutputFolderError(f"output folder {out} is a file, not a folder; {what_to_do}")
+    mark = out / OUTPUT_MARK
+    try:
+        marked = mark.is_file() and not mark.is_symlink()
+        if out.is_dir() and not marked and any(out.iterdir()):
+            raise OutputFolderError(
+                f"output folder {out} is not empty and not one demo.sh made (no {OUTPUT_MARK} "
+                f"in it): nothing there is removed or overwritten; {what_to_do}")
+        previous = [out / name for name in REPLACED if os.path.lexists(out / name)]
+        for folder in previous:
+            if folder.is_symlink() or not folder.is_dir():
+                raise OutputFolderError(
+                    f"{folder} is not a folder demo.sh made (a file or a link); move it away "
+                    f"or {what_to_do}")
+            if scenario_path.is_relative_to(folder.resolve()):
+                raise OutputFolderError(
+                    f"the scenario {scenario_path} is inside {folder}, which the run replaces; "
+                    "move the scenario elsewhere")
+        out.mkdir(parents=True, exist_ok=True)
+        mark.write_text("An output folder of scripts/demo.sh: a run into it replaces bag/ "
+                        "and logs/.\n")
+        for folder in previous:  # of an earlier run into the same folder
+            shutil.rmtree(folder)
+        (out / "logs").mkdir()
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise OutputFolderError(
+            f"cannot write into the output folder {out} ({reason}); {what_to_do}") from None
+
+
 def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
     """The scenario's `estimator:` overrides of mhe_node's parameters; ScenarioError for a
     parameter mhe_node does not have. Integers given for real parameters become reals
@@ -285,11 +334,16 @@ def main() -> int:
         return 2
     scenario = replace(scenario, path=scenario.path.resolve())
     out = out.resolve()
-    for previous in (out / "bag", out / "logs"):  # of an earlier run into the same folder
-        if previous.is_dir():
-            shutil.rmtree(previous)
-    (out / "logs").mkdir(parents=True)
-    mhe_params = write_parameter_file(out / "logs" / "mhe_node.params.yaml", overrides)
+    try:
+        prepare_output(out, scenario.path)
+        mhe_params = write_parameter_file(out / "logs" / "mhe_node.params.yaml", overrides)
+    except OutputFolderError as error:
+        print(f"demo: {error}", file=sys.stderr)  # one line
+        return 2
+    except OSError as error:
+        print(f"demo: cannot write into the output folder {out} "
+              f"({error.strerror or type(error).__name__})", file=sys.stderr)
+        return 2
 
     domain_id, lock = reserve_domain_id()
     os.environ.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
@@ -324,7 +378,7 @@ def main() -> int:
 
     try:
         metrics, figures = write_report(demo.bag, out, scenario.name)
-    except (ValueError, FileNotFoundError, ReaderError) as error:
+    except (ValueError, OSError) as error:  # a RecordingError is a ValueError
         print(f"demo: no report: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -6,6 +6,10 @@
 BAG: a rosbag2 directory recorded by recorder_node. DIR (default: BAG's parent) receives
 metrics.json and the figures (PNG: states, track, wind, residuals, sensitivity,
 estimates). NAME defaults to DIR's folder name (demo runs live in runs/<scenario>/).
+
+Exit status: 0 written; 2 a recording that is not a rosbag2 folder, cannot be read or
+decoded (truncated, empty, damaged) or lacks a stream the metrics need, or an output folder
+that cannot be written (one line naming it); 1 the report failed otherwise.
 """
 
 from __future__ import annotations
@@ -16,13 +20,18 @@ import sys
 from pathlib import Path
 
 from uav_fault_estimator.analysis import figures, report
-from uav_fault_estimator.analysis.recording import project_typestore, read_topics
+from uav_fault_estimator.analysis.recording import (
+    RecordingError,
+    project_typestore,
+    read_topics,
+)
 
 
 def write_report(bag: Path, out: Path, scenario: str) -> tuple[dict, list[Path]]:
     """Write metrics.json and the figures of the recording BAG into OUT: (metrics, figures).
 
-    ValueError or FileNotFoundError (naming the bag) when the recording lacks a stream.
+    RecordingError (a ValueError, one line naming the bag) when the recording cannot be
+    read or lacks a stream; OSError when OUT cannot be written.
     """
     typestore = project_typestore()
     # one pass over the recording for the metrics and the figures
@@ -43,8 +52,15 @@ def main() -> int:
     try:
         metrics, written = write_report(
             arguments.bag, out, arguments.scenario or out.resolve().name)
-    except (ValueError, FileNotFoundError) as error:
+    except RecordingError as error:
         print(f"report.py: {error}", file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f"report.py: cannot write into {out} "
+              f"({error.strerror or type(error).__name__})", file=sys.stderr)
+        return 2
+    except ValueError as error:
+        print(f"report.py: {' '.join(str(error).split())}", file=sys.stderr)
         return 1
     print(report.table(metrics))
     print(f"written to {out}: metrics.json, " + ", ".join(path.name for path in written))

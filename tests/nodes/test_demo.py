@@ -4,6 +4,7 @@ mid-run, and short flights whose metrics.json and figures come out of the record
 from __future__ import annotations
 
 import json
+import os
 import re
 import subprocess
 from collections.abc import Iterator
@@ -12,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from demo import OUTPUT_MARK, OutputFolderError, prepare_output
 from helpers.process_table import kill_all, nodes_logging_under
 from ros_processes import RosProcess, wait_until
 from uav_fault_estimator.analysis import report
@@ -174,3 +176,144 @@ def test_a_fault_free_flight_in_steady_wind_raises_no_false_alarm(
     largest = {name: fault["max_abs_error_pct"] for name, fault in metrics["faults"].items()}
     assert metrics["false_alarms"] == [], largest
     assert max(largest.values()) < 0.2, largest
+
+
+@pytest.mark.timeout(60)
+def test_a_scenario_that_is_not_utf8_is_one_line(tmp_path, run_dir) -> None:
+    path = tmp_path / "latin1.yaml"
+    path.write_bytes((scenarios_dir() / "default.yaml").read_bytes().replace(
+        b"name: default", "name: défaut".encode("latin-1")))
+    result = bad_scenario_run(path, run_dir)
+    lines = result.stderr.splitlines()
+    assert result.returncode == 2, result
+    assert lines == [f"demo: scenario {path}: not UTF-8 text (byte 0xe9 at offset "
+                     f"{path.read_bytes().index(0xE9)})"], result.stderr
+    assert not run_dir.exists()
+    assert not nodes_logging_under(tmp_path)
+
+
+def demo_into(out: Path, scenario: Path | None = None) -> subprocess.CompletedProcess:
+    """demo.sh with an output folder it is expected to refuse (before any node starts)."""
+    scenario_args = [str(scenario)] if scenario else []
+    return subprocess.run([str(DEMO), *scenario_args, "--out", str(out)], capture_output=True,
+                          text=True, timeout=60)
+
+
+def contents(folder: Path) -> dict[str, bytes | None]:
+    """Every path under folder (relative) with a file's bytes (None for a folder)."""
+    return {str(path.relative_to(folder)): None if path.is_dir() else path.read_bytes()
+            for path in sorted(folder.rglob("*"))}
+
+
+@pytest.mark.timeout(60)
+def test_a_folder_the_demo_did_not_make_is_refused_untouched(tmp_path, run_dir) -> None:
+    """The issue's case: logs/ and bag/ of the user's own, no mark: nothing is removed,
+    nothing written, nothing started; one line naming the folder and what to do."""
+    (run_dir / "logs").mkdir(parents=True)
+    (run_dir / "logs" / "important.txt").write_text("the user's notes\n")
+    (run_dir / "bag").mkdir()
+    (run_dir / "bag" / "metadata.yaml").write_text("not the demo's\n")
+    (run_dir / "metrics.json").write_text("{}\n")
+    before = contents(run_dir)
+    result = demo_into(run_dir)
+    assert result.returncode == 2, result
+    assert result.stderr.splitlines() == [
+        f"demo: output folder {run_dir} is not empty and not one demo.sh made (no "
+        f"{OUTPUT_MARK} in it): nothing there is removed or overwritten; choose another "
+        "--out (a new or empty folder)"], result.stderr
+    assert result.stdout == ""
+    assert contents(run_dir) == before  # no mark either
+    assert not nodes_logging_under(tmp_path)
+
+
+@pytest.mark.timeout(60)
+def test_an_out_that_is_a_file_or_cannot_be_written_is_one_line(tmp_path) -> None:
+    a_file = tmp_path / "results.txt"
+    a_file.write_text("keep me\n")
+    read_only = Path("/sys") / f"uav_demo_test_{os.getpid()}"  # mkdir fails there, even as root
+    cases = [
+        (a_file, f"demo: output folder {a_file} is a file, not a folder; choose another "
+                 "--out (a new or empty folder)"),
+        (a_file / "run", f"demo: cannot write into the output folder {a_file / 'run'} (Not a "
+                         "directory); choose another --out (a new or empty folder)"),
+        (read_only, f"demo: cannot write into the output folder {read_only} ("),
+    ]
+    for out, line in cases:
+        result = demo_into(out)
+        lines = result.stderr.splitlines()
+        assert result.returncode == 2, result
+        assert len(lines) == 1 and lines[0].startswith(line), result.stderr
+        assert "Traceback" not in result.stderr
+    assert a_file.read_text() == "keep me\n"
+    assert not read_only.exists()
+    assert not nodes_logging_under(tmp_path)
+
+
+@pytest.mark.timeout(30)
+def test_prepare_output_makes_marks_and_replaces_only_its_own(tmp_path) -> None:
+    scenario = tmp_path / "flight.yaml"
+    out = tmp_path / "new" / "run"
+    prepare_output(out, scenario)  # a new folder (and its parent): made and marked
+    assert contents(out) == {OUTPUT_MARK: (out / OUTPUT_MARK).read_bytes(), "logs": None}
+
+    # an earlier run's bag/ and logs/ go; what else is in the marked folder stays
+    (out / "bag").mkdir()
+    (out / "bag" / "bag.mcap").write_bytes(b"earlier")
+    (out / "logs" / "sim_node.log").write_text("earlier\n")
+    (out / "metrics.json").write_text("{}\n")
+    (out / "notes.txt").write_text("mine\n")
+    prepare_output(out, scenario)
+    assert sorted(contents(out)) == sorted([OUTPUT_MARK, "logs", "metrics.json", "notes.txt"])
+    assert (out / "notes.txt").read_text() == "mine\n"
+
+    empty = tmp_path / "empty"  # an existing empty folder is taken and marked
+    empty.mkdir()
+    prepare_output(empty, scenario)
+    assert (empty / OUTPUT_MARK).is_file() and (empty / "logs").is_dir()
+
+
+@pytest.mark.timeout(30)
+def test_prepare_output_refuses_links_files_and_the_scenario_inside(tmp_path) -> None:
+    target = tmp_path / "elsewhere"
+    target.mkdir()
+    (target / "keep.txt").write_text("keep\n")
+    out = tmp_path / "run"
+    prepare_output(out, tmp_path / "flight.yaml")
+    (out / "bag").symlink_to(target)
+    refused = "^" + re.escape(f"{out / 'bag'} is not a folder demo.sh made")
+    with pytest.raises(OutputFolderError, match=refused):
+        prepare_output(out, tmp_path / "flight.yaml")
+    assert (target / "keep.txt").read_text() == "keep\n" and (out / "bag").is_symlink()
+
+    (out / "bag").unlink()
+    (out / "bag").write_text("a file\n")
+    with pytest.raises(OutputFolderError, match=re.escape("is not a folder demo.sh made")):
+        prepare_output(out, tmp_path / "flight.yaml")
+    (out / "bag").unlink()
+
+    inside = out / "logs" / "flight.yaml"
+    inside.write_text("name: x\n")
+    with pytest.raises(OutputFolderError, match=r"inside .*/logs, which the run replaces"):
+        prepare_output(out, inside)
+    assert inside.read_text() == "name: x\n"
+
+
+@pytest.mark.timeout(150)
+def test_a_second_run_into_its_folder_replaces_the_first(
+        start_process, short_scenario, run_dir) -> None:
+    """demo.sh twice into the same --out: the second run's bag/ and logs/ replace the
+    first's, a file the user left beside them stays."""
+    fly(start_process, short_scenario(10.0), run_dir)
+    assert (run_dir / OUTPUT_MARK).is_file()
+    (run_dir / "logs" / "stale.log").write_text("from the first run\n")
+    (run_dir / "notes.txt").write_text("mine\n")
+    first_mcap = {path.name for path in (run_dir / "bag").glob("*.mcap")}
+
+    output = fly(start_process, short_scenario(12.0), run_dir)
+    assert "pipeline: 24/24 estimates" in output, output
+    assert not (run_dir / "logs" / "stale.log").exists()
+    assert (run_dir / "notes.txt").read_text() == "mine\n"
+    assert json.loads((run_dir / "metrics.json").read_text())["duration_s"] == 12.0
+    states = read_topics(run_dir / "bag", project_typestore(), ("/state",))["/state"]
+    assert len(states) == 12 * 20 + 1, len(states)  # the second flight's, at 20 Hz from 0 s
+    assert {path.name for path in (run_dir / "bag").glob("*.mcap")} == first_mcap

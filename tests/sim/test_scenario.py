@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 import dataclasses
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 from helpers.flights import fly
 from uav_sim.paths import scenarios_dir
-from uav_sim.scenario import ScenarioError, SensorDropout, default_scenario_path, load_scenario
+from uav_sim.scenario import (
+    MAX_SCENARIO_BYTES,
+    MAX_WAYPOINTS,
+    ScenarioError,
+    SensorDropout,
+    default_scenario_path,
+    load_scenario,
+)
 
 
 def write(tmp_path, data) -> str:
@@ -136,3 +145,72 @@ def test_every_shipped_scenario_loads_under_its_file_name(path):
     scenario = load_scenario(path)
     assert scenario.name == path.stem
     assert scenario.duration_s == 300
+
+
+@pytest.mark.timeout(30)
+def test_a_file_that_is_not_utf8_is_one_line_naming_it(tmp_path, default_data):
+    path = tmp_path / "latin1.yaml"
+    path.write_bytes(yaml.safe_dump(default_data).encode() + "# réglé\n".encode("latin-1"))
+    with pytest.raises(ScenarioError) as error:
+        load_scenario(path)
+    offset = path.read_bytes().index(0xE9)
+    assert str(error.value) == f"scenario {path}: not UTF-8 text (byte 0xe9 at offset {offset})"
+
+
+@pytest.mark.timeout(30)
+def test_a_file_above_the_size_limit_is_refused_before_parsing(tmp_path, default_data):
+    """The issue's 37 MB file took 7.7 GB and 5 minutes: refused unparsed, read no further
+    than the limit (the invalid YAML and /dev/zero's endless bytes are never parsed)."""
+    big = tmp_path / "big.yaml"
+    points = ", ".join(f"[{k}, {k}]" for k in range(300_000))
+    big.write_text(yaml.safe_dump(default_data) + "waypoints_extra: [" + points + "\n")
+    assert big.stat().st_size > 10 * MAX_SCENARIO_BYTES
+    started = time.monotonic()
+    for path in (big, Path("/dev/zero")):
+        with pytest.raises(ScenarioError) as error:
+            load_scenario(path)
+        assert str(error.value) == (f"scenario {path}: larger than 64 KiB, the most a scenario "
+                                    "file may be (the shipped ones are under 2 kB)")
+    assert time.monotonic() - started < 5.0  # parsing 4 MB would take about 40 s
+
+
+@pytest.mark.timeout(30)
+def test_a_file_just_under_the_size_limit_loads(tmp_path, default_data):
+    text = yaml.safe_dump(default_data)
+    padding = "# a comment line of a long scenario file\n"
+    text += padding * ((MAX_SCENARIO_BYTES - len(text)) // len(padding))
+    path = write(tmp_path, text)
+    assert MAX_SCENARIO_BYTES - len(padding) < Path(path).stat().st_size <= MAX_SCENARIO_BYTES
+    assert load_scenario(path).name == "default"
+
+
+@pytest.mark.timeout(30)
+def test_the_waypoint_count_is_capped(tmp_path, default_data):
+    square = [[0, 0], [1500, 0], [1500, 1500], [0, 1500]]
+    default_data["waypoints_ne_m"] = square * (MAX_WAYPOINTS // 4)
+    assert len(load_scenario(write(tmp_path, default_data)).waypoints_ne_m) == MAX_WAYPOINTS
+    default_data["waypoints_ne_m"] = square * (MAX_WAYPOINTS // 4) + [[7, 7]]
+    with pytest.raises(ScenarioError) as error:
+        load_scenario(write(tmp_path, default_data))
+    assert str(error.value).endswith(
+        f": 'waypoints_ne_m' has {MAX_WAYPOINTS + 1} points, more than the {MAX_WAYPOINTS} a "
+        "scenario may have")
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("name", ["../../etc", "/", "a/b", ".", ".."])
+def test_the_name_must_be_a_folder_name(tmp_path, default_data, name):
+    """demo.sh writes into runs/<name>/: no name may lead elsewhere."""
+    default_data["name"] = name
+    path = write(tmp_path, default_data)
+    with pytest.raises(ScenarioError) as error:
+        load_scenario(path)
+    assert str(error.value).startswith(f"scenario {path}: 'name' must be usable as a folder name")
+
+
+@pytest.mark.timeout(30)
+def test_deeply_nested_yaml_is_one_line(tmp_path):
+    path = write(tmp_path, "name: " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ScenarioError) as error:
+        load_scenario(path)
+    assert str(error.value) == f"scenario {path}: not valid YAML (nested too deeply)"

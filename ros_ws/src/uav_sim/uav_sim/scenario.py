@@ -23,6 +23,14 @@ from uav_sim.paths import scenarios_dir
 # the others: JSBSim's MIL-HDBK-1797 presets (uav_sim.wind).
 TURBULENCE_LEVELS = ("from_wind", "none", "light", "moderate", "severe")
 DEFAULT_SCENARIO = "default.yaml"
+# Refused before parsing: the shipped scenarios are 0.8-1.5 kB, and 64 KiB still holds some
+# 2000 hand-written waypoints with comments. PyYAML's pure-Python parser takes 200-250 bytes
+# of memory and about 10 us per byte of a waypoint list (measured: 0.8 MiB, 10 s and 210 MB;
+# 37 MB, 5 min and 7.7 GB), so a 64 KiB file parses in under a second and 20 MB.
+MAX_SCENARIO_BYTES = 64 * 1024
+# A 300 s flight at 25 m/s covers 7.5 km: a thousand waypoints are legs of 7.5 m, already
+# shorter than the guidance can turn onto. More is a generated file, not a flight plan.
+MAX_WAYPOINTS = 1000
 
 
 class ScenarioError(ValueError):
@@ -210,6 +218,9 @@ def _waypoints(reader: _Reader) -> tuple[tuple[float, float], ...]:
     points = reader.items("waypoints_ne_m")
     if len(points) < 2:
         reader.fail("'waypoints_ne_m' needs at least two [north_m, east_m] points")
+    if len(points) > MAX_WAYPOINTS:
+        reader.fail(f"'waypoints_ne_m' has {len(points)} points, more than the "
+                    f"{MAX_WAYPOINTS} a scenario may have")
     for index, point in enumerate(points):
         if not (isinstance(point, list) and len(point) == 2 and all(map(_is_number, point))):
             reader.fail(f"'waypoints_ne_m[{index}]' must be [north_m, east_m], got {point!r}")
@@ -238,15 +249,38 @@ def _dropout(reader: _Reader) -> SensorDropout:
     return dropout
 
 
+def _read_text(path: Path) -> str:
+    """The file's text; ScenarioError when it cannot be read, is larger than
+    MAX_SCENARIO_BYTES (checked before it is parsed, and read no further than that) or is
+    not UTF-8."""
+    try:
+        with path.open("rb") as file:
+            content = file.read(MAX_SCENARIO_BYTES + 1)
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise ScenarioError(f"scenario {path}: cannot read the file ({reason})") from None
+    if len(content) > MAX_SCENARIO_BYTES:
+        raise ScenarioError(
+            f"scenario {path}: larger than {MAX_SCENARIO_BYTES // 1024} KiB, the most a "
+            "scenario file may be (the shipped ones are under 2 kB)")
+    try:
+        return content.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ScenarioError(
+            f"scenario {path}: not UTF-8 text (byte 0x{content[error.start]:02x} at offset "
+            f"{error.start})") from None
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and check a scenario file; raises ScenarioError with one clear message."""
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as error:
-        raise ScenarioError(f"scenario {path}: cannot read the file ({error.strerror})") from None
+        data = yaml.safe_load(_read_text(path))
     except yaml.YAMLError as error:
-        raise ScenarioError(f"scenario {path}: not valid YAML ({error})") from None
+        raise ScenarioError(f"scenario {path}: not valid YAML ({' '.join(str(error).split())})"
+                            ) from None
+    except RecursionError:
+        raise ScenarioError(f"scenario {path}: not valid YAML (nested too deeply)") from None
     reader = _Reader(path, data, "")
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
@@ -254,6 +288,10 @@ def load_scenario(path: str | Path) -> Scenario:
     )
     if not isinstance(data["name"], str) or not data["name"]:
         reader.fail(f"'name' must be a non-empty string, got {data['name']!r}")
+    if data["name"] in (".", "..") or any(c in data["name"] for c in "/\\\0"):
+        # demo.sh's default output folder is runs/<name>/
+        reader.fail(f"'name' must be usable as a folder name (no '/', '\\', NUL, not '.' "
+                    f"or '..'), got {data['name']!r}")
     seed = data["seed"]
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         reader.fail(f"'seed' must be a non-negative integer, got {seed!r}")

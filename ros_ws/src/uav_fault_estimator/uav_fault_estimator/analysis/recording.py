@@ -8,11 +8,13 @@ from their .msg definitions; the standard ones come with rosbags' ROS 2 Jazzy ty
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
+from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 from uav_sim.paths import share_dir
@@ -67,16 +69,44 @@ class Recording:
 RECEIVED_NS = "received_ns"  # the key of read_topics' receive times
 
 
+class RecordingError(ValueError):
+    """A recording that cannot be read; the message (one line) names it and says why."""
+
+
+# What a damaged recording raises while it is opened, read or decoded (measured on truncated,
+# empty, random and byte-flipped files and metadata): rosbags' own errors, the file
+# system's, and what its parsers meet in damaged bytes or metadata (wrong lengths, offsets,
+# encodings, record kinds, value types).
+_DAMAGED = (ReaderError, SerdeError, OSError, ValueError, TypeError, AttributeError,
+            struct.error, OverflowError, IndexError, KeyError, MemoryError)
+
+
 def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dict[str, list]:
     """The decoded messages of each topic of a recording, in recording order, and under
-    RECEIVED_NS the receive times [ns] of all of them."""
+    RECEIVED_NS the receive times [ns] of all of them. RecordingError (one line naming the
+    recording) when it is not a rosbag2 folder or cannot be read or decoded."""
+    bag = Path(bag)
+    if not bag.is_dir():
+        raise RecordingError(f"recording {bag}: " + (
+            "not a folder (a rosbag2 recording is a folder with metadata.yaml)"
+            if bag.exists() else "no such folder"))
+    if not (bag / "metadata.yaml").is_file():
+        raise RecordingError(f"recording {bag}: no metadata.yaml (not a rosbag2 recording)")
     messages: dict[str, list] = {topic: [] for topic in topics}
     received_ns: list[int] = []
-    with Reader(bag) as reader:
-        wanted = [c for c in reader.connections if c.topic in messages]
-        for connection, timestamp_ns, raw in reader.messages(connections=wanted):
-            messages[connection.topic].append(typestore.deserialize_cdr(raw, connection.msgtype))
-            received_ns.append(timestamp_ns)
+    try:
+        with Reader(bag) as reader:
+            wanted = [c for c in reader.connections if c.topic in messages]
+            # rosbags reads every connection when given none
+            for connection, timestamp_ns, raw in (
+                    reader.messages(connections=wanted) if wanted else ()):
+                messages[connection.topic].append(
+                    typestore.deserialize_cdr(raw, connection.msgtype))
+                received_ns.append(timestamp_ns)
+    except _DAMAGED as error:
+        reason = " ".join(str(error).split()) or type(error).__name__
+        raise RecordingError(
+            f"recording {bag}: unreadable, damaged or not rosbag2 ({reason})") from None
     messages[RECEIVED_NS] = received_ns
     return messages
 

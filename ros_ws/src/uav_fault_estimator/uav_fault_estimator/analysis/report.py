@@ -20,7 +20,7 @@ from uav_fault_estimator.analysis.metrics import (
     fault_metrics,
     solver_metrics,
 )
-from uav_fault_estimator.analysis.recording import RECEIVED_NS
+from uav_fault_estimator.analysis.recording import RECEIVED_NS, RecordingError
 
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
@@ -45,10 +45,10 @@ class Run:
 
 def run_from(messages: dict[str, list], bag: Path) -> Run:
     """The Run of a recording's messages (recording.read_topics of at least TOPICS);
-    ValueError naming the bag when a stream is missing."""
+    RecordingError (a ValueError) naming the bag when a stream is missing."""
     missing = [topic for topic in REQUIRED_TOPICS if not messages.get(topic)]
     if missing:
-        raise ValueError(f"{bag}: no messages on {', '.join(missing)}")
+        raise RecordingError(f"recording {bag}: no messages on {', '.join(missing)}")
     estimates, seeded = messages[ESTIMATE_TOPIC], messages[SEEDED_TOPIC]
     received_ns = messages[RECEIVED_NS]
     return Run(
@@ -125,12 +125,12 @@ def table(metrics: dict) -> str:
              f"{'fault':<26}{'seeded':>8}{'final':>9}{'estimate':>10}{'rmse':>8}"
              f"{'max err':>9}{'delay s':>9}"]
     for name, fault in metrics["faults"].items():
-        delay = fault["detection_delay_s"]
+        # None: no figure (a flight no longer than settle_s has no error figures)
         lines.append(
             f"{name:<26}{'yes' if fault['seeded'] else 'no':>8}"
-            f"{fault['seeded_final_pct']:>9.2f}{fault['estimate_final_pct']:>10.2f}"
-            f"{fault['rmse_pct']:>8.2f}{fault['max_abs_error_pct']:>9.2f}"
-            f"{'-' if delay is None else f'{delay:.1f}':>9}")
+            f"{_figure(fault['seeded_final_pct'], 9)}{_figure(fault['estimate_final_pct'], 10)}"
+            f"{_figure(fault['rmse_pct'], 8)}{_figure(fault['max_abs_error_pct'], 9)}"
+            f"{_figure(fault['detection_delay_s'], 9, '.1f')}")
     solver, pipeline = metrics["solver"], metrics["pipeline"]
     lines += [
         f"false alarms: {', '.join(metrics['false_alarms']) or 'none'}",
@@ -147,6 +147,10 @@ def table(metrics: dict) -> str:
                   f"after the fault {_seconds(test['first_alarm_delay_s'])}"
                   for name, test in alarms["tests"].items()]
     return "\n".join(lines)
+
+
+def _figure(value: float | None, width: int, spec: str = ".2f") -> str:
+    return f"{'-' if value is None else format(value, spec):>{width}}"
 
 
 def _seconds(value: float | None) -> str:
