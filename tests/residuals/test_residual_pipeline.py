@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 from uav_fault_estimator.estimation.residuals import ResidualGenerator
-from uav_fault_estimator.nodes.stamp_matching import StampMatcher
+from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampMatcher, StampVerdict
 from uav_sim.channels import STATE_CHANNELS
 from uav_sim.filters import LowPass
 
@@ -159,3 +159,47 @@ def test_a_non_finite_prediction_skips_the_sample_and_keeps_the_state() -> None:
     # one interval of twice the length instead of two: the filters barely notice
     assert np.all(np.isfinite(sample.residual))
     assert sample.residual == pytest.approx(expected.residual, abs=1e-3)
+
+
+@pytest.mark.timeout(30)
+def test_a_stray_stamp_is_dropped_and_only_a_run_of_them_is_a_restart() -> None:
+    s = 1_000_000_000
+    guard = StampGuard(confirm_stamps=3, max_ahead_s=10.0)
+    verdicts = []
+    for stamp in (1 * s, 2 * s, 2 * s, 1 * s, 3 * s,   # a duplicate, one back: strays
+                  50 * s, 4 * s,                         # one far ahead: a stray
+                  1 * s, 1 * s, 2 * s, 3 * s, 4 * s):    # three distinct in a row: a restart
+        verdict = guard.check(stamp)
+        verdicts.append(verdict.value)
+        if verdict is not StampVerdict.STRAY:
+            guard.accept(stamp)
+    assert verdicts == ["accept", "accept", "stray", "stray", "accept", "stray", "accept",
+                        "stray", "stray", "stray", "restart", "accept"]
+    assert guard.newest_ns == 4 * s
+
+
+@pytest.mark.timeout(30)
+def test_the_residual_models_are_rebuilt_after_giving_nan() -> None:
+    """A model copy that once gives NaN is made anew (a JSBSim instance can keep giving it):
+    the sample is refused, the next one is evaluated by fresh copies."""
+    built = []
+
+    def poisonable(faults_pct):
+        model = factory(faults_pct)
+        built.append(model)
+        return lambda state, controls, wind: (np.full(6, np.nan) if len(built) <= 3
+                                              and state[LAT] >= 1.0 else model(state, controls,
+                                                                                wind))
+
+    gen = ResidualGenerator(poisonable, FAULTS, secant_step_pct=1.0, tau_a_s=TAU_A_S,
+                            sensitivity_period_s=0.5, recovery_s=1.0)
+    times = [k * DT_S for k in range(40)]
+    outcomes = []
+    for time_s in times:
+        try:
+            gen.update(time_s, state_at(time_s, np.zeros(2)), np.zeros(7), np.zeros(3))
+            outcomes.append("ok")
+        except ValueError:
+            outcomes.append("refused")
+    assert outcomes.count("refused") == 1 and gen.model_rebuilds == 1
+    assert len(built) == 6  # three copies, then three new ones

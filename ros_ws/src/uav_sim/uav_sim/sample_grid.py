@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+NANOSECONDS_PER_SECOND = 1_000_000_000  # stamps are integer nanoseconds
 GRID_TOLERANCE_S = 1e-6  # far above nanosecond rounding, far below any sensor period
 
 

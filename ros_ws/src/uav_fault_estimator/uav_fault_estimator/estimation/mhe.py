@@ -94,7 +94,7 @@ class MovingHorizonEstimator:
         noise_variances (m,): this sample's Q when not the configured one (another sensor
         suite: noise_model.py).
         Returns the EstimateResult: WAITING (values = prior) while the window holds no
-        valid residual row; INVALID_DATA for non-finite or misshapen data on valid
+        valid residual row; INVALID_DATA for non-finite, implausible or misshapen data on valid
         channels. A window not yet full is solved with its empty samples weighted 0.
         """
         start = time.perf_counter()

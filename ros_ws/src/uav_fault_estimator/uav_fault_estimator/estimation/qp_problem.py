@@ -38,23 +38,32 @@ def stage_normal_equations(
     return gram, linear
 
 
+# A residual beyond this many noise standard deviations (Q^½) is a data error, not a fault:
+# losing a whole wing's lift moves the roll residual by about 200 of them (0.6 rad/s² per %
+# against Q^½ = 0.36 rad/s² with air data). Such a row is left out like a non-finite one.
+RESIDUAL_PLAUSIBLE_SIGMAS = 1e3
+
+
 def sample_normal_equations(
     y: np.ndarray, s: np.ndarray, valid: np.ndarray | None, q_inv: np.ndarray, columns: int
 ) -> tuple[np.ndarray, np.ndarray, bool, bool]:
     """One residual sample's data term, with Q⁻¹ on the rows that are valid and finite and
-    0 on the others (a lost channel, a non-finite value: left out of the fit).
+    0 on the others (a lost channel, a non-finite or implausible value: left out of the fit;
+    implausible: |y| beyond RESIDUAL_PLAUSIBLE_SIGMAS noise deviations).
 
     Inputs: y (m,) residuals; s (m, p) signatures [residual unit / %]; valid (m,) booleans
     or None for all; q_inv (m,) [1 / residual unit²]; columns p. Returns G (p, p) [1/%²],
     h (p,) [1/%], whether any row entered, and whether the sample was clean (shapes right,
-    every row marked valid finite). A misshapen sample enters as no data.
+    every row marked valid finite and plausible). A misshapen sample enters as no data.
     """
     m, p = q_inv.size, columns
     y, s = np.asarray(y, dtype=float), np.asarray(s, dtype=float)
     keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
         return np.zeros((p, p)), np.zeros(p), False, False
-    finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1)
+    with np.errstate(invalid="ignore", over="ignore"):
+        plausible = np.abs(y) * np.sqrt(q_inv) <= RESIDUAL_PLAUSIBLE_SIGMAS
+    finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1) & plausible
     weight = np.where(keep & finite, q_inv, 0.0)
     gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],
                                           np.where(finite[:, None], s, 0.0)[None], weight[None])

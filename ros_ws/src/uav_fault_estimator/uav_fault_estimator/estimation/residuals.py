@@ -34,6 +34,7 @@ keeps y ~= S f, and body axes make the signatures readable (lift: z, drag: x).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -101,6 +102,7 @@ class _Column:
     """One column of S: a model copy, the wind shift it sees, and the secant step."""
 
     name: str
+    faults_pct: Mapping[str, float]  # seeded into its model copy
     model: Prediction
     wind_shift_mps: np.ndarray
     step: float  # [%] for a fault, [m/s] for a wind error
@@ -147,18 +149,20 @@ class ResidualGenerator:
                              f"{wind_error_step_mps} m/s")
         self.sensitivity_period_s = sensitivity_period_s
         self.recovery_s = recovery_s
+        self.predictor_factory = predictor_factory
         self.nominal = predictor_factory({})
         self.columns = [
-            _Column(name, predictor_factory({name: secant_step_pct}), np.zeros(3),
-                    secant_step_pct)
+            _Column(name, {name: secant_step_pct}, predictor_factory({name: secant_step_pct}),
+                    np.zeros(3), secant_step_pct)
             for name in fault_names
         ]
         if wind_error_step_mps > 0:
             self.columns += [
-                _Column(name, predictor_factory({}), wind_error_step_mps * np.eye(3)[axis],
+                _Column(name, {}, predictor_factory({}), wind_error_step_mps * np.eye(3)[axis],
                         wind_error_step_mps)
                 for axis, name in enumerate(WIND_ERROR_NAMES)
             ]
+        self.model_rebuilds = 0  # times the model copies gave NaN and were made anew
         self.column_names = tuple(column.name for column in self.columns)
         self.observed_filter = LowPass(tau_a_s)
         self.predicted_filter = LowPass(tau_a_s)
@@ -192,8 +196,18 @@ class ResidualGenerator:
         prediction = np.column_stack([nominal, self.raw_sensitivity])
         if not np.all(np.isfinite(prediction)):
             self.raw_sensitivity = None  # recomputed at the next sample
-            raise ValueError("the prediction model gave non-finite accelerations")
+            self._rebuild_models()
+            raise ValueError("the prediction model gave non-finite accelerations: its copies "
+                             "were rebuilt")
         return prediction
+
+    def _rebuild_models(self) -> None:
+        """New model copies: a JSBSim instance that once gave NaN may keep giving it."""
+        factory = self.predictor_factory
+        self.nominal = factory({})
+        self.columns = [dataclasses.replace(column, model=factory(column.faults_pct))
+                        for column in self.columns]
+        self.model_rebuilds += 1
 
     def _update_row_validity(self, missing: set[str], time_s: float) -> np.ndarray:
         """Rows usable now; rows coming back from a dropout wait recovery_s."""
@@ -211,7 +225,8 @@ class ResidualGenerator:
 
         air_data (3,): measured true airspeed [m/s], alpha, beta [rad], or None; when usable
         (air_data_usable) the models fly it instead of the filtered wind wind_ned_mps.
-        Raises ValueError for a time that does not increase (call reset() first).
+        Raises ValueError for a time that does not increase (call reset() first), and for a sample
+        the models cannot evaluate (the model copies are then rebuilt).
         """
         if self.last_time_s is not None and time_s <= self.last_time_s:
             raise ValueError(f"time {time_s} s does not follow {self.last_time_s} s: reset first")

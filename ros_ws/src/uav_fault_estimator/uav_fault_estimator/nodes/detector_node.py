@@ -12,6 +12,7 @@ import sys
 
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultAlarm
+from uav_sim.envelope import CONTROL_LIMITS, STATE_LIMITS
 from uav_sim.ros.messages import controls_array, header, state_array
 from uav_sim.ros.node_tools import (
     ERROR,
@@ -39,7 +40,8 @@ PARAMETERS = {
     "false_alarm_probability": "designed P_FA per sample of each test (eq. 23-25)",
 }
 # `state` last: see MatchedStreams
-STREAMS = {"controls": (ControlInputs, controls_array), "state": (AircraftState, state_array)}
+STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),
+           "state": (AircraftState, state_array, STATE_LIMITS)}
 
 
 class DetectorNode(Node):
@@ -63,7 +65,7 @@ class DetectorNode(Node):
         if sample is None:  # off the grid, or skipped
             if self.detector.skipped_samples > skipped:
                 self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
-                                        "missing)", self.health())
+                                        "missing or implausible)", self.health())
             return
         self.publisher.publish(self.message(sample))
         self.counts["published"] += 1
@@ -100,7 +102,8 @@ class DetectorNode(Node):
 
     def health(self) -> dict[str, int]:
         return {**self.counts, "skipped_samples": self.detector.skipped_samples,
-                "stamp_resets": self.streams.restarts,
+                "implausible_values": self.streams.implausible_values,
+                "stamp_resets": self.streams.restarts, "stray_stamps": self.streams.stray_messages,
                 "dropped_incomplete_samples": self.streams.dropped_sets}
 
 

@@ -6,14 +6,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 from rclpy.node import Node
+from uav_sim.envelope import gate
 from uav_sim.ros.messages import stamp_nanoseconds
 from uav_sim.ros.node_tools import STREAM_QOS
 
-from uav_fault_estimator.nodes.stamp_matching import StampMatcher
+from uav_fault_estimator.nodes.stamp_matching import StampMatcher, StampVerdict
 
-# (message type, message -> array) per topic
-Streams = dict[str, tuple[type, Callable[[Any], Any]]]
+# (message type, message -> array, the array's envelope (low, high) arrays) per topic
+Streams = dict[str, tuple[type, Callable[[Any], Any], tuple[np.ndarray, np.ndarray]]]
 
 
 class MatchedStreams:
@@ -21,8 +23,9 @@ class MatchedStreams:
     wait_for_subscribers counts `state` subscriptions, so list `state` last. Complete sets
     go to on_sample(time_s, arrays by topic) in stamp order, with the optional topics'
     arrays where they came (waited for while the topic has a publisher, for up to
-    StampMatcher.optional_wait newer sets); a required stamp not newer than the
-    last processed one (a restarted source) is warned of once (ending with restart_note:
+    StampMatcher.optional_wait newer sets). A required message whose stamp is a stray
+    (StampGuard: a duplicate, one going backwards or far ahead) is dropped and counted; a
+    restarted source (several such stamps in a row) is warned of (ending with restart_note:
     what on_restart does), resets the matcher and calls on_restart() first."""
 
     def __init__(self, node: Node, streams: Streams,
@@ -31,16 +34,31 @@ class MatchedStreams:
                  optional: Streams | None = None) -> None:
         self.node = node
         optional = optional or {}
-        self.to_array = {topic: convert for topic, (_, convert)
+        self.to_array = {topic: convert for topic, (_, convert, _)
                          in {**optional, **streams}.items()}
+        self.limits = {topic: limits for topic, (*_, limits) in {**optional, **streams}.items()}
         self.matcher = StampMatcher(tuple(streams), tuple(optional), self.has_publisher)
         self.on_sample, self.on_restart = on_sample, on_restart
         self.restart_note = restart_note
         self.restarts = 0
-        for topic, (message_type, _) in {**optional, **streams}.items():
+        self.stray_messages = 0
+        self.implausible_values = 0  # outside the aircraft's envelope: taken as missing
+        for topic, (message_type, *_) in {**optional, **streams}.items():
             node.create_subscription(
                 message_type, topic, lambda message, topic=topic: self.receive(topic, message),
                 STREAM_QOS)
+
+    def plausible(self, topic: str, message: Any) -> np.ndarray:
+        """The message as an array, values outside the aircraft's envelope NaN (missing: the
+        core holds the last good value and marks what depends on it), said and counted."""
+        values, implausible = gate(self.to_array[topic](message), self.limits[topic])
+        if implausible:
+            self.implausible_values += implausible
+            self.node.get_logger().warning(
+                f"{topic} at {stamp_nanoseconds(message.header.stamp) / 1e9:.3f} s: "
+                f"{implausible} value(s) outside the aircraft's envelope, taken as missing",
+                throttle_duration_sec=5.0)
+        return values
 
     def has_publisher(self, topic: str) -> bool:
         """Whether some node publishes this topic now."""
@@ -53,13 +71,21 @@ class MatchedStreams:
 
     def receive(self, topic: str, message: Any) -> None:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
-        if topic in self.matcher.streams and self.matcher.is_backwards(stamp_ns):
-            self.node.get_logger().warning(
-                f"{topic} stamp {stamp_ns / 1e9:.3f} s is not newer than the last processed one:"
-                f" the source restarted, {self.restart_note}")
-            self.matcher.reset()
-            self.restarts += 1
-            self.on_restart()
-        for sample_ns, payloads in self.matcher.add(topic, stamp_ns,
-                                                    self.to_array[topic](message)):
+        if topic in self.matcher.streams:
+            verdict = self.matcher.guard.check(stamp_ns)
+            if verdict is StampVerdict.STRAY:
+                self.stray_messages += 1
+                self.node.get_logger().warning(
+                    f"{topic} stamp {stamp_ns / 1e9:.3f} s is out of order (a duplicate, one "
+                    "going backwards or far ahead): message dropped", throttle_duration_sec=5.0)
+                return
+            if verdict is StampVerdict.RESTART:
+                self.node.get_logger().warning(
+                    f"{topic} stamps restarted at {stamp_ns / 1e9:.3f} s: the source restarted,"
+                    f" {self.restart_note}")
+                self.matcher.reset()
+                self.restarts += 1
+                self.on_restart()
+        values = self.plausible(topic, message)
+        for sample_ns, payloads in self.matcher.add(topic, stamp_ns, values):
             self.on_sample(sample_ns / 1e9, payloads)

@@ -12,7 +12,7 @@ from collections import deque
 import numpy as np
 from rclpy.node import Node
 from uav_fault_msgs.msg import FaultEstimate, Residuals
-from uav_sim.ros.messages import header, stamp_seconds
+from uav_sim.ros.messages import header, stamp_nanoseconds, stamp_seconds
 from uav_sim.ros.node_tools import (
     ERROR,
     OK,
@@ -29,6 +29,7 @@ from uav_fault_estimator.estimation.estimator_config import (
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.estimation.solve_status import SolveStatus
+from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampVerdict
 
 PARAMETERS = {
     "fault_names": "the estimated faults: columns of the residuals' S, by name",
@@ -79,17 +80,27 @@ class MheNode(Node):
         self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
-                       "stamp_resets": 0}
+                       "stamp_resets": 0, "stray_stamps": 0}
+        self.stamps = StampGuard()
 
     def on_residuals(self, message: Residuals) -> None:
+        stamp_ns = stamp_nanoseconds(message.header.stamp)
         time_s = stamp_seconds(message.header.stamp)
-        if self.window_stamps_s and time_s <= self.window_stamps_s[-1]:
+        verdict = self.stamps.check(stamp_ns)
+        if verdict is StampVerdict.STRAY:
+            self.counts["stray_stamps"] += 1
             self.get_logger().warning(
-                f"residual stamp {time_s:.3f} s is not newer than {self.window_stamps_s[-1]:.3f}"
-                " s: the source restarted, estimator reset")
+                f"residual stamp {time_s:.3f} s is out of order (a duplicate, one going "
+                "backwards or far ahead): dropped", throttle_duration_sec=5.0)
+            return
+        if verdict is StampVerdict.RESTART:
+            self.get_logger().warning(
+                f"residual stamps restarted at {time_s:.3f} s: the source restarted, "
+                "estimator reset")
             self.estimator.reset()
             self.window_stamps_s.clear()
             self.counts["stamp_resets"] += 1
+        self.stamps.accept(stamp_ns)
         columns = self.columns(message)
         if columns is None:
             return

@@ -13,6 +13,7 @@ import time
 
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
+from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, WIND_LIMITS
 from uav_sim.ros.messages import air_data_array, controls_array, header, state_array, wind_array
 from uav_sim.ros.node_tools import (
     OK,
@@ -42,9 +43,10 @@ PARAMETERS = {
     "wind_error_step_mps": "secant step of the wind-error columns of S; 0: none [m/s]",
 }
 # `state` last: see MatchedStreams
-STREAMS = {"controls": (ControlInputs, controls_array),
-           "wind/filtered": (WindEstimate, wind_array), "state": (AircraftState, state_array)}
-OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array)}
+STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),
+           "wind/filtered": (WindEstimate, wind_array, WIND_LIMITS),
+           "state": (AircraftState, state_array, STATE_LIMITS)}
+OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS)}
 
 
 class ResidualNode(Node):
@@ -118,7 +120,10 @@ class ResidualNode(Node):
         return {
             **self.counts,
             "stamp_resets": self.streams.restarts,
+            "stray_stamps": self.streams.stray_messages,
             "dropped_incomplete_samples": self.streams.dropped_sets,
+            "implausible_values": self.streams.implausible_values,
+            "model_rebuilds": self.generator.model_rebuilds,
             "core_ms_per_sample": f"{1e3 * self.core_time_s / max(self.counts['samples'], 1):.3f}",
         }
 
@@ -128,7 +133,8 @@ class ResidualNode(Node):
         source = "air data" if sample.wind_source == WIND_AIR_DATA else "filtered wind"
         problems = []
         if invalid:
-            problems.append("rows invalid (a state channel is missing): " + ", ".join(invalid))
+            problems.append("rows invalid (a state channel is missing or implausible): "
+                            + ", ".join(invalid))
         if sample.wind_source != WIND_AIR_DATA and self.streams.has_publisher("air_data"):
             problems.append("no usable air data: the models fly the filtered wind")
         self.diagnostics.update(

@@ -1,10 +1,64 @@
-"""Match messages of several streams by their stamp, not by their arrival order."""
+"""Match messages of several streams by their stamp, not by their arrival order; tell a
+stray stamp from a restarted source (no ROS here)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any
+
+from uav_sim.sample_grid import NANOSECONDS_PER_SECOND
+
+
+class StampVerdict(Enum):
+    """What to do with a message, by its stamp (StampGuard.check)."""
+
+    ACCEPT = "accept"    # in order
+    STRAY = "stray"      # drop it, and nothing else
+    RESTART = "restart"  # the source restarted: reset, then take this message as the first
+
+
+@dataclass
+class StampGuard:
+    """Stamps of a stream should rise. A stamp not newer than the newest accepted one (a
+    duplicate, one going backwards) or more than max_ahead_s past it is a stray: dropped,
+    alone. Only when confirm_stamps such distinct stamps arrive with nothing accepted in
+    between is the source taken as restarted (or jumped): the caller resets.
+
+    A restart thus loses its first confirm_stamps - 1 stamps (0.2 s at 20 Hz), and a single
+    bad stamp loses nothing but itself.
+    """
+
+    confirm_stamps: int = 5
+    max_ahead_s: float = 10.0  # sensors every 0.05 s, residuals every 0.5 s: far beyond both
+    newest_ns: int | None = None
+    strays: set[int] = field(default_factory=set)
+
+    def in_order(self, stamp_ns: int) -> bool:
+        """Whether the stamp is newer than the newest accepted one, and not too far ahead."""
+        newest = self.newest_ns
+        return newest is None or (
+            newest < stamp_ns <= newest + self.max_ahead_s * NANOSECONDS_PER_SECOND)
+
+    def check(self, stamp_ns: int) -> StampVerdict:
+        """Classify a stamp against the newest accepted one (`accept` records that)."""
+        if self.in_order(stamp_ns):
+            self.strays.clear()
+            return StampVerdict.ACCEPT
+        self.strays.add(stamp_ns)
+        if len(self.strays) < self.confirm_stamps:
+            return StampVerdict.STRAY
+        self.reset()
+        return StampVerdict.RESTART
+
+    def accept(self, stamp_ns: int) -> None:
+        """The stream's newest stamp is now stamp_ns."""
+        self.newest_ns = stamp_ns
+
+    def reset(self) -> None:
+        self.newest_ns = None
+        self.strays.clear()
 
 
 @dataclass
@@ -16,8 +70,8 @@ class StampMatcher:
     optional_wait newer stamps' required sets are complete (that optional message is late
     or lost: the set goes without it, and the message, should it come, is dropped and
     counted). Older sets whose required part never completed are dropped when a newer one
-    is released, and counted. A required stamp older than the newest released one means
-    the source restarted: `is_backwards` tells, and the caller decides (reset).
+    is released, and counted. `guard` holds the newest released stamp: the caller asks it
+    about each required message first (a stray is dropped, a restart resets).
     """
 
     streams: tuple[str, ...]
@@ -25,17 +79,18 @@ class StampMatcher:
     awaited: Callable[[str], bool] = lambda stream: True
     optional_wait: int = 20
     pending: dict[int, dict[str, Any]] = field(default_factory=dict)
-    last_released_ns: int | None = None
+    guard: StampGuard = field(default_factory=StampGuard)
     dropped_sets: int = 0
     late_optional: int = 0
 
     def reset(self) -> None:
         self.pending.clear()
-        self.last_released_ns = None
+        self.guard.reset()
 
     def is_backwards(self, stamp_ns: int) -> bool:
-        """Whether a stamp lies at or before the newest released one (a restarted source)."""
-        return self.last_released_ns is not None and stamp_ns <= self.last_released_ns
+        """Whether a stamp lies at or before the newest released one."""
+        newest = self.guard.newest_ns
+        return newest is not None and stamp_ns <= newest
 
     def _complete(self, entry: dict[str, Any]) -> bool:
         return all(stream in entry for stream in self.streams)
@@ -45,8 +100,8 @@ class StampMatcher:
         if stream not in self.streams + self.optional:
             raise KeyError(f"unknown stream '{stream}', expected one of "
                            f"{self.streams + self.optional}")
-        if stream in self.optional and self.is_backwards(stamp_ns):
-            self.late_optional += 1  # its set went without it
+        if stream in self.optional and not self.guard.in_order(stamp_ns):
+            self.late_optional += 1  # its set went without it (or a stray stamp)
             return []
         self.pending.setdefault(stamp_ns, {})[stream] = payload
         complete = sorted(stamp for stamp, entry in self.pending.items()
@@ -63,5 +118,5 @@ class StampMatcher:
                     o not in entry and self.awaited(o) for o in self.optional):
                 break  # its optional message may still come
             released.append((stamp, self.pending.pop(stamp)))
-            self.last_released_ns = stamp
+            self.guard.accept(stamp)
         return released

@@ -22,12 +22,12 @@ from uav_sim.channels import (
     STATE_UNITS,
     field_name,
 )
+from uav_sim.sample_grid import NANOSECONDS_PER_SECOND
 
 NED_FRAME = "ned"
 BODY_FRAME = "body"
 STATE_FIELDS = tuple(map(field_name, STATE_CHANNELS, STATE_UNITS))
 CONTROL_FIELDS = tuple(map(field_name, CONTROL_CHANNELS, CONTROL_UNITS))
-NANOSECONDS_PER_SECOND = 1_000_000_000
 
 
 def stamp(time_s: float) -> Time:
