@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from helpers.graph import RosGraph
+from ros_graph import RosGraph
 from ros_processes import RosProcess, reserve_domain_id
 
 REPO_ROOT = Path(__file__).resolve().parent.parent

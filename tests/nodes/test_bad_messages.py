@@ -10,13 +10,13 @@ import math
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from helpers.replay import FlightSample, Replayer, simulated_flight
+from flight_replay import FlightSample, Replayer, simulated_flight
 from ros_processes import ros2_run_argv
-from uav_fault_msgs.msg import Residuals
+from uav_fault_msgs.msg import FaultAlarm, Residuals
 from uav_sim.channels import STATE_CHANNELS
 from uav_sim.ros.messages import stamp_seconds
 from uav_sim.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
-from uav_sim.scenario import default_scenario_path
+from uav_sim.scenario import default_scenario_path, load_scenario
 
 pytestmark = pytest.mark.integration
 
@@ -28,21 +28,25 @@ VELOCITY_NORTH = STATE_CHANNELS.index("velocity_north")
 RATES = [STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate")]
 
 
-def start_pair(start_process, graph):
-    """residual_node in the clean and the disturbed namespace; their residuals and the
-    disturbed one's diagnostics."""
+def start_pair(start_process, graph, node: str = "residual_node",
+               output: tuple[str, type] = ("residuals", Residuals)):
+    """The node in the clean and the disturbed namespace; their outputs, the diagnostics
+    and a replayer into both."""
+    parameters = ["-p", f"recovery_s:={RECOVERY_S}"] if node == "residual_node" else []
     for namespace in (CLEAN, DIRTY):
         start_process(ros2_run_argv(
-            "uav_fault_estimator", "residual_node",
-            ros_args=["-r", f"__ns:={namespace}", "-p", f"recovery_s:={RECOVERY_S}"]),
-            f"residual_node{namespace.replace('/', '_')}")
-    received = graph.subscribe({f"{CLEAN}/residuals": Residuals,
-                                f"{DIRTY}/residuals": Residuals}, STREAM_QOS)
+            "uav_fault_estimator", node, ros_args=["-r", f"__ns:={namespace}", *parameters]),
+            f"{node}{namespace.replace('/', '_')}")
+    topic, kind = output
+    received = graph.subscribe({f"{CLEAN}/{topic}": kind, f"{DIRTY}/{topic}": kind},
+                               STREAM_QOS)
     diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
                                   DIAGNOSTICS_QOS)["/diagnostics"]
     replayer = Replayer(graph, (CLEAN, DIRTY))
-    assert replayer.wait_for_subscribers(1, timeout_s=30)
-    return received[f"{CLEAN}/residuals"], received[f"{DIRTY}/residuals"], diagnostics, replayer
+    assert replayer.wait_for_subscribers({} if node == "residual_node" else
+                                         {"state": 1, "controls": 1, "wind/filtered": 0,
+                                          "air_data": 0}, timeout_s=30)
+    return received[f"{CLEAN}/{topic}"], received[f"{DIRTY}/{topic}"], diagnostics, replayer
 
 
 def latest_values(diagnostics: list[DiagnosticArray], node: str) -> dict[str, str]:
@@ -53,7 +57,7 @@ def latest_values(diagnostics: list[DiagnosticArray], node: str) -> dict[str, st
     return {}
 
 
-def by_stamp(messages: list[Residuals]) -> dict[float, Residuals]:
+def by_stamp(messages: list) -> dict[float, object]:
     return {round(stamp_seconds(m.header.stamp), 6): m for m in messages}
 
 
@@ -66,7 +70,7 @@ def test_implausible_values_are_missing_values_and_the_residuals_come_back(
     non-finite or absurd, and once good data is back the residuals equal the undisturbed
     node's: the difference fades with the residual filter F_a, below 1e-3 after 5 tau_a."""
     duration_s = 50.0
-    flight = simulated_flight(str(default_scenario_path()), duration_s)
+    flight = simulated_flight(load_scenario(default_scenario_path()), duration_s)
     clean, dirty, diagnostics, replayer = start_pair(start_process, graph)
 
     def corrupt(sample: FlightSample, topic: str, values: np.ndarray):
@@ -113,7 +117,7 @@ def test_stray_stamps_are_dropped_and_change_nothing(graph, start_process):
     once on every stream: dropped and counted; the residuals equal the undisturbed node's,
     no stamp of 1e6 s is published, and nothing is reset."""
     duration_s = 20.0
-    flight = simulated_flight(str(default_scenario_path()), duration_s)
+    flight = simulated_flight(load_scenario(default_scenario_path()), duration_s)
     clean, dirty, diagnostics, replayer = start_pair(start_process, graph)
     previous: dict[str, tuple[float, np.ndarray]] = {}
 
@@ -142,3 +146,37 @@ def test_stray_stamps_are_dropped_and_change_nothing(graph, start_process):
     health = latest_values(diagnostics, "/dirty/residual_node")
     assert health["stamp_resets"] == "0"
     assert health["stray_stamps"] == "9"  # three strays on each of the three required streams
+
+
+@pytest.mark.timeout(240)
+def test_absurd_body_rates_leave_the_detector_as_it_was(graph, start_process):
+    """Body rates of 1e6 rad/s for 0.5 s (before any fault): taken as missing, the
+    detector skips those samples, and it raises no alarm the undisturbed one does not (it
+    used to hold its combined alarm for the rest of the flight)."""
+    duration_s = 45.0
+    flight = simulated_flight(load_scenario(default_scenario_path()), duration_s)
+    clean, dirty, diagnostics, replayer = start_pair(
+        start_process, graph, "detector_node", ("faults/alarm", FaultAlarm))
+
+    def corrupt(sample: FlightSample, topic: str, values: np.ndarray):
+        values = values.copy()
+        if topic == "state" and 30.0 <= round(sample.time_s, 6) < 30.5:
+            values[RATES] = 1e6
+        return [(sample.time_s, values)]
+
+    replayer.play(flight, CLEAN, DIRTY, corrupt)
+    expected = round(duration_s / 0.2)  # 5 Hz from 0.2 s on (the first sample has no r[k-1])
+    graph.spin(30.0, until=lambda: len(clean) >= expected and len(dirty) >= expected - 3)
+    graph.spin(2.0, until=lambda: latest_values(diagnostics, "/dirty/detector_node").get(
+        "implausible_values") == "30")
+    clean_at, dirty_at = by_stamp(clean), by_stamp(dirty)
+    print(f"{len(clean)} clean and {len(dirty)} disturbed alarm messages")
+    # 5 Hz: the samples at 30.0, 30.2 and 30.4 s are skipped, nothing else
+    assert len(clean_at) == expected
+    assert sorted(set(clean_at) - set(dirty_at)) == [30.0, 30.2, 30.4]
+    assert set(dirty_at) < set(clean_at)
+    for stamp_s, message in dirty_at.items():
+        assert message.combined_alarm == clean_at[stamp_s].combined_alarm, stamp_s
+    assert not any(m.combined_alarm for m in dirty)
+    health = latest_values(diagnostics, "/dirty/detector_node")
+    assert health["implausible_values"] == "30"  # 10 state messages, three rates each

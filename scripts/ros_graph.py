@@ -1,4 +1,5 @@
-"""An rclpy node inside the test process, to watch the graph and collect messages."""
+"""An rclpy node of its own inside a process (a test, a benchmark): topic discovery,
+message collection and publishing, in a context of its own."""
 
 from __future__ import annotations
 

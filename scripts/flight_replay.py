@@ -5,12 +5,14 @@ while another gets it untouched, so that two copies of a node can be compared.""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from rclpy.duration import Duration
+from ros_graph import RosGraph
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, WindEstimate
 from uav_sim.ros.messages import (
     air_data_message,
@@ -19,7 +21,7 @@ from uav_sim.ros.messages import (
     wind_message,
 )
 from uav_sim.ros.node_tools import STREAM_QOS
-from uav_sim.scenario import load_scenario
+from uav_sim.scenario import Scenario
 from uav_sim.simulation import Simulation
 
 TOPICS = {"state": AircraftState, "controls": ControlInputs, "wind/filtered": WindEstimate,
@@ -33,18 +35,17 @@ class FlightSample:
     arrays: dict[str, np.ndarray]  # by topic
 
 
-def simulated_flight(scenario_path: str, duration_s: float) -> list[FlightSample]:
-    """Every sensor sample of the scenario up to duration_s [s] (sim_node's arrays)."""
-    simulation = Simulation(load_scenario(scenario_path))
+def simulated_flight(scenario: Scenario, duration_s: float) -> list[FlightSample]:
+    """Every sensor sample of the scenario flown for duration_s [s] (sim_node's arrays)."""
+    simulation = Simulation(dataclasses.replace(scenario, duration_s=duration_s))
     samples, sample = [], simulation.sample()
-    while sample.time_s <= duration_s + 1e-9:
+    while True:
         samples.append(FlightSample(sample.time_s, {
             "state": sample.state, "controls": sample.controls,
             "wind/filtered": sample.wind_filtered_ned_mps, "air_data": sample.air_data}))
         if simulation.finished:
-            break
+            return samples
         sample = simulation.step()
-    return samples
 
 
 def message(topic: str, time_s: float, values: np.ndarray) -> Any:
@@ -66,17 +67,19 @@ Corruption = Callable[[FlightSample, str, np.ndarray], Sequence[tuple[float, np.
 class Replayer:
     """Publishers in the test's graph node for the clean and the disturbed namespace."""
 
-    def __init__(self, graph, namespaces: Sequence[str]) -> None:
+    def __init__(self, graph: RosGraph, namespaces: Sequence[str]) -> None:
         self.graph = graph
         self.publishers = {
             (namespace, topic): graph.node.create_publisher(kind, f"{namespace}/{topic}",
                                                             STREAM_QOS)
             for namespace in namespaces for topic, kind in TOPICS.items()}
 
-    def wait_for_subscribers(self, count: int, timeout_s: float) -> bool:
-        """Whether every publisher has count subscriptions within timeout_s."""
+    def wait_for_subscribers(self, counts: dict[str, int], timeout_s: float) -> bool:
+        """Whether each topic's publishers (every namespace) have counts[topic] subscriptions
+        (1 for a topic not named) within timeout_s."""
         def ready() -> bool:
-            return all(p.get_subscription_count() >= count for p in self.publishers.values())
+            return all(p.get_subscription_count() >= counts.get(topic, 1)
+                       for (_, topic), p in self.publishers.items())
         self.graph.spin(timeout_s, until=ready)
         return ready()
 
