@@ -62,7 +62,7 @@ def test_a_calibration_for_another_window_is_refused_with_one_line():
     result = subprocess.run(
         ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=["-p", "window:=40"]),
         capture_output=True, text=True, timeout=50)
-    assert result.returncode == 1, result
+    assert result.returncode == 2, result  # bad input
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr
     assert "was made for window 25" in lines[0] and "calibrate_detector.py" in lines[0]

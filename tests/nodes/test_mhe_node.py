@@ -62,7 +62,7 @@ def test_a_bad_fault_model_ends_mhe_node_with_one_message():
             "-p", "fault_models:=[monotonic, monotonic, gaussian_mixture, monotonic]"]),
         capture_output=True, text=True, timeout=50,
     )
-    assert result.returncode == 1
+    assert result.returncode == 2  # bad input
     assert "Traceback" not in result.stderr
     assert "mhe_node: fault left_wing_lift_loss: unknown model 'gaussian_mixture'" in (
         result.stderr)

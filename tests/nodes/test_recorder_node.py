@@ -49,6 +49,6 @@ def test_an_existing_output_dir_is_refused_with_one_message(tmp_path):
                       ros_args=["-p", f"output_dir:={tmp_path}"]),
         capture_output=True, text=True, timeout=50,
     )
-    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert result.returncode == 2 and "Traceback" not in result.stderr
     assert f"recorder_node: output_dir '{tmp_path}' must be given and must not exist" in (
         result.stderr)

@@ -107,6 +107,6 @@ def test_an_unknown_fault_name_ends_residual_node_with_one_message():
                       ros_args=["-p", "fault_names:=[right_wing_lift_loss, wing_fell_off]"]),
         capture_output=True, text=True, timeout=50,
     )
-    assert result.returncode == 1
+    assert result.returncode == 2  # bad input
     assert "Traceback" not in result.stderr
     assert "residual_node: unknown fault names ['wing_fell_off']" in result.stderr

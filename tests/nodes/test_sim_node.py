@@ -87,6 +87,6 @@ def test_sim_node_with_a_missing_scenario_ends_with_one_message(tmp_path):
         text=True,
         timeout=50,
     )
-    assert result.returncode == 1
+    assert result.returncode == 2  # bad input
     assert "Traceback" not in result.stderr
     assert str(missing) in result.stderr

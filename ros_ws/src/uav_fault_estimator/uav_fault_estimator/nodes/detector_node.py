@@ -20,6 +20,7 @@ from uav_sim.ros.node_tools import (
     STREAM_QOS,
     WARN,
     Diagnostics,
+    ParameterSpec,
     declare_parameters,
     run_node,
 )
@@ -33,11 +34,14 @@ from uav_fault_estimator.detection.self_tuning import (
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
-    "calibration_file": "detector calibration YAML; empty: the package's "
-                        "config/detector_calibration.yaml",
-    "window": "M: GLRT window [samples]; must be the calibration's",
-    "forgetting_factor": "lambda_f of the RLS; must be the calibration's",
-    "false_alarm_probability": "designed P_FA per sample of each test (eq. 23-25)",
+    "calibration_file": ParameterSpec("detector calibration YAML; empty: the package's "
+                                      "config/detector_calibration.yaml"),
+    "window": ParameterSpec("M: GLRT window [samples]; must be the calibration's", 2, 1000),
+    # below 0.5 the RLS remembers about two samples: nothing left to identify
+    "forgetting_factor": ParameterSpec("lambda_f of the RLS; must be the calibration's",
+                                       0.5, 1.0),
+    "false_alarm_probability": ParameterSpec(
+        "designed P_FA per sample of each test (eq. 23-25)", 1e-9, 0.5),
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),

@@ -19,6 +19,7 @@ from uav_sim.ros.node_tools import (
     STREAM_QOS,
     WARN,
     Diagnostics,
+    ParameterSpec,
     declare_parameters,
     run_node,
 )
@@ -31,32 +32,46 @@ from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEsti
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampVerdict
 
+# Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
+# it; variances and scales positive where the estimator divides by them; the horizon at
+# most 2000 samples (1000 s at 0.5 s, three times the default flight): the QP grows with it.
 PARAMETERS = {
-    "fault_names": "the estimated faults: columns of the residuals' S, by name",
-    "fault_models": "per fault: monotonic, monotonic_decreasing, random_walk, uniform, "
-    "laplacian or constant",
-    "fault_model_scales_pct": "per fault: the model's scale (lambda, sigma or a) [%/sample]",
-    "fault_model_coefficients": "per fault: a in f(t+1) = a f(t) + gamma (random_walk)",
-    "lower_bounds_pct": "per fault: lower bound on f [%]",
-    "upper_bounds_pct": "per fault: upper bound on f [%]",
-    "prior_pct": "per fault: f before any data [%]",
-    "horizon": "N: residual samples in the moving window",
-    "noise_calibration_file": "residual noise per sensor suite (scripts/calibrate_estimator.py);"
-    " empty: the shipped config/residual_noise.yaml",
-    "noise_variance_factor": "Q = this factor times the calibrated variances (correlated "
-    "noise: fewer independent samples than the window holds)",
-    "handover_variances_pct2": "R of eq. 17: per fault, the arrival cost's variance before any "
-    "data [%^2]",
-    "arrival_inflation": "factor (>= 1) on the arrival cost's covariance every sample",
-    "arrival_floor_variances_pct2": "per fault: the least variance of the arrival cost [%^2]",
-    "arrival_centre": "where the arrival cost is centred: filter (the arrival filter's mean) "
-    "or previous_window (the previous window's estimate, as the paper)",
-    "estimate_wind_errors": "also estimate the wind-estimate errors (S columns *_error of "
-    "residual_node) as random-walk nuisance parameters",
-    "wind_error_sigma_mps": "random-walk step of each wind error per residual sample [m/s]",
-    "wind_error_handover_variance_m2ps2": "R of eq. 17 for each wind error [m^2/s^2]",
-    "solver_eps_abs": "ProxSuite's absolute tolerance (on the scaled problem)",
-    "solver_max_iter": "ProxSuite's iteration limit per update",
+    "fault_names": ParameterSpec("the estimated faults: columns of the residuals' S, by name"),
+    "fault_models": ParameterSpec("per fault: monotonic, monotonic_decreasing, random_walk, "
+                                  "uniform, laplacian or constant"),
+    "fault_model_scales_pct": ParameterSpec(
+        "per fault: the model's scale (lambda, sigma or a) [%/sample]", 1e-6, 100.0),
+    "fault_model_coefficients": ParameterSpec(
+        "per fault: a in f(t+1) = a f(t) + gamma (random_walk)", 0.0, 2.0),
+    "lower_bounds_pct": ParameterSpec("per fault: lower bound on f [%]", -1000.0, 1000.0),
+    "upper_bounds_pct": ParameterSpec("per fault: upper bound on f [%]", -1000.0, 1000.0),
+    "prior_pct": ParameterSpec("per fault: f before any data [%]", -1000.0, 1000.0),
+    "horizon": ParameterSpec("N: residual samples in the moving window", 2, 2000),
+    "noise_calibration_file": ParameterSpec(
+        "residual noise per sensor suite (scripts/calibrate_estimator.py); empty: the shipped "
+        "config/residual_noise.yaml"),
+    "noise_variance_factor": ParameterSpec(
+        "Q = this factor times the calibrated variances (correlated noise: fewer independent "
+        "samples than the window holds)", 1e-3, 1e6),
+    "handover_variances_pct2": ParameterSpec(
+        "R of eq. 17: per fault, the arrival cost's variance before any data [%^2]", 1e-6, 1e6),
+    "arrival_inflation": ParameterSpec(
+        "factor (>= 1) on the arrival cost's covariance every sample", 1.0, 10.0),
+    "arrival_floor_variances_pct2": ParameterSpec(
+        "per fault: the least variance of the arrival cost [%^2]", 0.0, 1e6),
+    "arrival_centre": ParameterSpec(
+        "where the arrival cost is centred: filter (the arrival filter's mean) or "
+        "previous_window (the previous window's estimate, as the paper)"),
+    "estimate_wind_errors": ParameterSpec(
+        "also estimate the wind-estimate errors (S columns *_error of residual_node) as "
+        "random-walk nuisance parameters"),
+    "wind_error_sigma_mps": ParameterSpec(
+        "random-walk step of each wind error per residual sample [m/s]", 1e-4, 10.0),
+    "wind_error_handover_variance_m2ps2": ParameterSpec(
+        "R of eq. 17 for each wind error [m^2/s^2]", 1e-6, 1e4),
+    "solver_eps_abs": ParameterSpec("ProxSuite's absolute tolerance (on the scaled problem)",
+                                    1e-12, 0.1),
+    "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000),
 }
 RECENT_SOLVES = 200  # solve times kept for the median and p99 on /diagnostics
 

@@ -14,13 +14,14 @@ from pathlib import Path
 
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from uav_sim.ros.node_tools import declare_parameters, run_node
+from uav_sim.ros.node_tools import ParameterSpec, declare_parameters, run_node
 
 from uav_fault_estimator.analysis.recording import Recording, project_typestore
 
 PARAMETERS = {
-    "output_dir": "the rosbag2 directory to create (it must not exist yet)",
-    "discovery_period_s": "how often new topics are looked for [s, wall time]",
+    "output_dir": ParameterSpec("the rosbag2 directory to create (it must not exist yet)"),
+    "discovery_period_s": ParameterSpec(
+        "how often new topics are looked for [s, wall time]", 0.01, 60.0),
 }
 
 

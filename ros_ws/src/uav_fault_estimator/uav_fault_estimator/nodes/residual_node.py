@@ -20,6 +20,7 @@ from uav_sim.ros.node_tools import (
     STREAM_QOS,
     WARN,
     Diagnostics,
+    ParameterSpec,
     declare_parameters,
     run_node,
 )
@@ -34,13 +35,19 @@ from uav_fault_estimator.estimation.residuals import (
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
-    "fault_names": "faults whose sensitivities are computed: the columns of S",
-    "secant_step_pct": "secant step s of the sensitivity, eq. 8 / 15 [%]",
-    "tau_a_s": "time constant of the smoothing filter F_a, eq. 5-6 [s]",
-    "update_period_s": "residuals are published every this much simulation time [s]",
-    "sensitivity_period_s": "S is recomputed every this much simulation time [s]",
-    "recovery_s": "rows stay invalid this long after a missing channel is back [s]",
-    "wind_error_step_mps": "secant step of the wind-error columns of S; 0: none [m/s]",
+    "fault_names": ParameterSpec("faults whose sensitivities are computed: the columns of S"),
+    "secant_step_pct": ParameterSpec("secant step s of the sensitivity, eq. 8 / 15 [%]",
+                                     0.01, 100.0),
+    "tau_a_s": ParameterSpec("time constant of the smoothing filter F_a, eq. 5-6 [s]",
+                             0.1, 100.0),
+    "update_period_s": ParameterSpec(
+        "residuals are published every this much simulation time [s]", 0.01, 60.0),
+    "sensitivity_period_s": ParameterSpec(
+        "S is recomputed every this much simulation time; 0: every sample [s]", 0.0, 60.0),
+    "recovery_s": ParameterSpec(
+        "rows stay invalid this long after a missing channel is back [s]", 0.0, 600.0),
+    "wind_error_step_mps": ParameterSpec(
+        "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 10.0),
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),

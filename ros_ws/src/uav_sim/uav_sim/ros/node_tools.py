@@ -1,19 +1,28 @@
 """What every node of the project shares: QoS per kind of topic, parameters declared with
-descriptors from the package's config YAML, and a /diagnostics publisher."""
+descriptors (type, range) from the package's config YAML and checked, a /diagnostics
+publisher, and the main that runs a node and ends it cleanly (run_node)."""
 
 from __future__ import annotations
 
+import re
+import signal
 import sys
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import rclpy
+import rclpy.logging
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
 
 from uav_sim.paths import default_parameters
 
@@ -31,21 +40,116 @@ DIAGNOSTICS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
 
 
-def declare_parameters(
-    node: Node, package: str, config_file: str, descriptions: dict[str, str]
-) -> dict[str, Any]:
-    """Declare each described parameter with its default from the package's config YAML.
+@dataclass(frozen=True)
+class ParameterSpec:
+    """What a node says about one of its parameters: its description and, for numbers, the
+    closed range [low, high] its values (each element of an array) must lie in. The default
+    lives in the package's config YAML alone, and its type is the default's type."""
 
-    Values given on the command line or in a --params-file override the defaults. Returns
-    the parameters' values by name.
+    description: str
+    low: float | None = None
+    high: float | None = None
+
+    def range_text(self) -> str:
+        return "" if self.low is None or self.high is None else f"[{self.low:g}, {self.high:g}]"
+
+
+class ParameterError(ValueError):
+    """A parameter override the node refuses (bad type, out of range, unknown)."""
+
+
+_TYPE_NAMES = {
+    Parameter.Type.BOOL: "a boolean", Parameter.Type.INTEGER: "an integer",
+    Parameter.Type.DOUBLE: "a real number", Parameter.Type.STRING: "a string",
+    Parameter.Type.BYTE_ARRAY: "a byte array", Parameter.Type.BOOL_ARRAY: "a boolean list",
+    Parameter.Type.INTEGER_ARRAY: "an integer list", Parameter.Type.DOUBLE_ARRAY: "a real list",
+    Parameter.Type.STRING_ARRAY: "a string list", Parameter.Type.NOT_SET: "no value",
+}
+_NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE)
+_NUMBER_ARRAYS = (Parameter.Type.INTEGER_ARRAY, Parameter.Type.DOUBLE_ARRAY)
+# An integer given where a real is declared (`-p solver_eps_abs:=1`, `tau_a_s: 4` in a
+# params file) is the real it names: taken as that real. Not the other way round: 50.0
+# for a count is refused, as a real there is more likely a slip than a whole number.
+_WIDENED = {Parameter.Type.INTEGER: Parameter.Type.DOUBLE,
+            Parameter.Type.INTEGER_ARRAY: Parameter.Type.DOUBLE_ARRAY}
+
+
+def _expected(kind: Parameter.Type, spec: ParameterSpec) -> str:
+    text = _TYPE_NAMES[kind]
+    if spec.range_text():
+        text += (" in " if kind in _NUMBERS else " of values in ") + spec.range_text()
+    return text
+
+
+def checked_value(name: str, value: Any, kind: Parameter.Type, spec: ParameterSpec) -> Any:
+    """value as the declared type `kind` (an integer widened to a real), in the spec's range;
+    ParameterError, one line naming the parameter, otherwise."""
+    given = Parameter.Type.from_parameter_value(value)
+    if isinstance(value, list | tuple) and not value and kind.name.endswith("_ARRAY"):
+        given = kind  # `[]` has no element to tell its type by
+    if given != kind and _WIDENED.get(given) == kind:
+        value = float(value) if kind == Parameter.Type.DOUBLE else [float(v) for v in value]
+        given = kind
+    if given != kind:
+        raise ParameterError(f"parameter {name}: {value!r} is {_TYPE_NAMES[given]}; it must be "
+                             f"{_expected(kind, spec)}")
+    if spec.range_text() and kind in _NUMBERS + _NUMBER_ARRAYS:
+        values = [value] if kind in _NUMBERS else list(value)
+        bad = [v for v in values if not spec.low <= v <= spec.high]  # NaN is never in range
+        if bad:
+            raise ParameterError(f"parameter {name}: {bad[0]!r} is out of range; it must be "
+                                 f"{_expected(kind, spec)}")
+    return value
+
+
+def _descriptor(kind: Parameter.Type, spec: ParameterSpec) -> ParameterDescriptor:
+    descriptor = ParameterDescriptor(description=spec.description, type=kind.value)
+    if spec.range_text():
+        if kind == Parameter.Type.DOUBLE:
+            descriptor.floating_point_range = [
+                FloatingPointRange(from_value=float(spec.low), to_value=float(spec.high))]
+        elif kind == Parameter.Type.INTEGER:
+            descriptor.integer_range = [
+                IntegerRange(from_value=int(spec.low), to_value=int(spec.high), step=1)]
+        elif kind in _NUMBER_ARRAYS:
+            descriptor.additional_constraints = f"each value in {spec.range_text()}"
+    return descriptor
+
+
+def declare_parameters(
+    node: Node, package: str, config_file: str, specs: Mapping[str, ParameterSpec | str]
+) -> dict[str, Any]:
+    """Declare each parameter with its default from the package's config YAML, its type and
+    range in its descriptor; the values by name.
+
+    Values given on the command line or in a --params-file override the defaults, after a
+    check: of the type (an integer is taken for a real), of the range, and that the node has
+    such a parameter. A bad one raises ParameterError (one line) before anything is declared.
     """
+    specs = {name: spec if isinstance(spec, ParameterSpec) else ParameterSpec(spec)
+             for name, spec in specs.items()}
     defaults = default_parameters(package, config_file)
-    missing = set(descriptions) ^ set(defaults)
+    missing = set(specs) ^ set(defaults)
     if missing:
         raise KeyError(f"parameters without both a description and a default: {sorted(missing)}")
-    for name, description in descriptions.items():
-        node.declare_parameter(name, defaults[name], ParameterDescriptor(description=description))
-    return {name: node.get_parameter(name).value for name in descriptions}
+    # rclpy keeps the overrides meant for this node (-p, --params-file) here; there is no
+    # public accessor, and declaring would take a wrong one with rclpy's own traceback.
+    overrides = {name: parameter.value for name, parameter in node._parameter_overrides.items()}
+    unknown = sorted(name for name in overrides
+                     if name not in specs and not node.has_parameter(name))
+    if unknown:
+        raise ParameterError(
+            f"unknown parameter{'s' if len(unknown) > 1 else ''} {', '.join(unknown)} (this "
+            f"node has: {', '.join(sorted(specs))})")
+    values = {}
+    for name, spec in specs.items():
+        kind = Parameter.Type.from_parameter_value(defaults[name])
+        checked_value(name, defaults[name], kind, spec)  # the shipped default fits, too
+        values[name] = checked_value(name, overrides.get(name, defaults[name]), kind, spec)
+    for name, spec in specs.items():
+        kind = Parameter.Type.from_parameter_value(defaults[name])
+        node.declare_parameter(name, values[name], _descriptor(kind, spec), ignore_override=True)
+    return {name: node.get_parameter(name).value for name in specs}
 
 
 class Diagnostics:
@@ -76,29 +180,109 @@ class Diagnostics:
 
 NodeType = TypeVar("NodeType", bound=Node)
 
+# Exit statuses of a node's process.
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+STOP_POLL_S = 0.1  # longest wait of spin() between looks at a stop signal [s, wall time]
+
+
+class Stopped(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived: the node ends, with status 0."""
+
+
+class _StopRequest:
+    """The stop signal received, if any, and whether the handler raises Stopped at once
+    (in a node's own run loop) or only records it (in spin(), which looks between callbacks:
+    raised inside a callback or a message conversion, pybind11 and the executor turn it into
+    other errors)."""
+
+    signal: int | None = None
+    raises = True
+
+
+def _stop(signum: int, _frame: object) -> None:
+    for sig in STOP_SIGNALS:  # once is enough: the node's clean-up is not interrupted
+        signal.signal(sig, signal.SIG_IGN)
+    _StopRequest.signal = signum
+    if _StopRequest.raises:
+        raise Stopped(signal.Signals(signum).name)
+
+
+def spin(node: Node) -> None:
+    """rclpy.spin until a stop signal: the wait for work ends every STOP_POLL_S to look for
+    one (a Python signal handler runs only between Python statements), and a signal ends it
+    between callbacks, never inside one."""
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    _StopRequest.raises = False
+    try:
+        while executor.context.ok() and _StopRequest.signal is None:
+            executor.spin_once(timeout_sec=STOP_POLL_S)
+    finally:
+        _StopRequest.raises = True
+        executor.remove_node(node)
+        executor.shutdown(timeout_sec=0.0)
+
+
+def _rcl_message(error: Exception) -> str:
+    """rcl's error text without its source locations (`, at /project/src/x.c:12`)."""
+    text = re.sub(r", at \S+:\d+", "", str(error))
+    return text.removeprefix("failed to initialize rcl: ")
+
+
+def _init(name: str, args: list[str] | None) -> bool:
+    """rclpy.init without rclpy's signal handlers; False, after one line, when rcl cannot
+    parse the arguments (a params file that does not parse or does not exist, a bad -p)."""
+    # rcl's own `Failed to parse global arguments` line would come before ours: muted.
+    rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.FATAL)
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except _rclpy.RCLError as error:
+        print(f"{name}: bad ROS arguments: {_rcl_message(error)}", file=sys.stderr)
+        return False
+    finally:
+        if rclpy.logging.get_logger_level("rcl") == rclpy.logging.LoggingSeverity.FATAL:
+            rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.UNSET)
+    return True
+
 
 def run_node(
     name: str,
     make_node: Callable[[], NodeType],
-    run: Callable[[NodeType], None] = rclpy.spin,
+    run: Callable[[NodeType], None] = spin,
     args: list[str] | None = None,
 ) -> int:
     """A node's main: init, make the node, run it, shut down; the exit status.
 
-    A ValueError while making or running it (a bad parameter or scenario) ends the process
-    with one line on stderr and status 1; Ctrl-C (SIGINT) or an external shutdown, with 0.
+    Bad input (arguments rcl cannot parse, a bad parameter or scenario: a ValueError while
+    making or running the node) ends the process with one line on stderr and status 2.
+    SIGINT and SIGTERM end it with status 0, however it was started: the node handles both
+    itself (also a SIGINT its starter ignored, as `cmd &` in a script does), rclpy's context
+    staying valid for the clean-up (rclpy's own handlers shut the context down under the
+    running node: RCLError tracebacks). spin() ends between callbacks; a node's own `run`
+    gets Stopped (a KeyboardInterrupt) raised in its main thread.
     """
-    rclpy.init(args=args)
+    if threading.current_thread() is threading.main_thread():
+        for sig in STOP_SIGNALS:
+            signal.signal(sig, _stop)
     node = None
     try:
+        if not _init(name, args):
+            return EXIT_BAD_INPUT
         node = make_node()
         run(node)
-        return 0
-    except ValueError as error:
-        print(f"{name}: {error}", file=sys.stderr)
-        return 1
+        return EXIT_OK
     except (KeyboardInterrupt, ExternalShutdownException):
-        return 0
+        return EXIT_OK
+    except Exception as error:
+        if _StopRequest.signal is not None:
+            # an error the stop caused: Stopped raised inside a call into C++ (a message
+            # conversion) comes out as another exception
+            return EXIT_OK
+        if isinstance(error, ValueError):
+            print(f"{name}: {error}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        raise
     finally:
         if node is not None:
             node.destroy_node()

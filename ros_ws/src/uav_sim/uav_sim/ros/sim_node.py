@@ -37,6 +37,7 @@ from uav_sim.ros.node_tools import (
     STREAM_QOS,
     WARN,
     Diagnostics,
+    ParameterSpec,
     declare_parameters,
     run_node,
 )
@@ -44,10 +45,14 @@ from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 
 PARAMETERS = {
-    "scenario": "scenario YAML file; empty for the shipped default scenario",
-    "sensor_rate_hz": "rate of every published stream and of /clock [Hz]",
-    "real_time_factor": "simulated seconds per wall second; 0: as fast as subscribers keep up",
-    "wait_for_subscribers": "start once state has this many subscriptions and discovery settled",
+    "scenario": ParameterSpec("scenario YAML file; empty for the shipped default scenario"),
+    # at least 1 Hz; at most JSBSim's own 480 Hz (and a divisor of it: Simulation checks)
+    "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock [Hz]",
+                                    1.0, 480.0),
+    "real_time_factor": ParameterSpec(
+        "simulated seconds per wall second; 0: as fast as subscribers keep up", 0.0, 1000.0),
+    "wait_for_subscribers": ParameterSpec(
+        "start once state has this many subscriptions and discovery settled", 0, 100),
 }
 ACK_TIMEOUT_S = 10.0
 ACK_POLL_S = 0.1  # wall time per wait for acknowledgements, between checks for SIGINT
