@@ -24,6 +24,7 @@ import os
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,6 +43,7 @@ CLEAN, DIRTY = "/clean", "/dirty"
 NODES = (("uav_fault_estimator", "residual_node"), ("uav_fault_estimator", "mhe_node"),
          ("uav_fault_estimator", "detector_node"))
 EVENT_GAP_S = (20.0, 60.0)
+RESIDUAL_PERIOD_S = residual_update_period_s()
 KINDS = ("velocity_1e200", "velocity_1e6", "rates_1e6", "nan", "inf", "duplicate",
          "backwards", "far_ahead", "lost_controls", "residual_1e300")
 SPANS_S = {"velocity_1e200": 2.0, "velocity_1e6": 0.5, "rates_1e6": 0.5, "nan": 1.0,
@@ -65,6 +67,8 @@ def schedule(duration_s: float, seed: int) -> list[Event]:
     while time_s < duration_s - 10.0:
         kind = str(rng.choice(KINDS))
         start = round(time_s / 0.05) * 0.05  # on a sensor sample
+        if kind == "residual_1e300":  # 0.4 of a residual period past a residual stamp
+            start = round((math.floor(time_s / RESIDUAL_PERIOD_S) + 0.8) * RESIDUAL_PERIOD_S, 6)
         events.append(Event(kind, start, SPANS_S.get(kind, 0.05)))
         time_s += rng.uniform(*EVENT_GAP_S)
     return events
@@ -73,9 +77,12 @@ def schedule(duration_s: float, seed: int) -> list[Event]:
 class Corruptor:
     """The replayer's corruption of /dirty: the scheduled events, sample by sample."""
 
-    def __init__(self, events: list[Event], residual_publisher) -> None:
+    def __init__(self, events: list[Event], residual_publisher, period_s: float,
+                 wait_for_estimate: Callable[[float], None]) -> None:
         self.events = events
         self.residual_publisher = residual_publisher
+        self.period_s = period_s
+        self.wait_for_estimate = wait_for_estimate
         self.previous: dict[str, tuple[float, np.ndarray]] = {}
 
     def active(self, time_s: float) -> list[Event]:
@@ -106,9 +113,18 @@ class Corruptor:
             elif kind == "far_ahead":
                 out.append((1e6, values))
             elif kind == "residual_1e300" and topic == "state":
-                self.residual_publisher.publish(absurd_residual(time_s + 0.25))
+                stamp_s = injected_stamp(event, self.period_s)
+                # in order: after the real residual before it has reached the estimator
+                self.wait_for_estimate(stamp_s - 0.5 * self.period_s)
+                self.residual_publisher.publish(absurd_residual(stamp_s))
         self.previous[topic] = (time_s, values)
         return out
+
+
+def injected_stamp(event: Event, period_s: float) -> float:
+    """Where an absurd residual goes: half-way between two of residual_node's stamps, after
+    the one the replay has passed (events of this kind start 0.4 of a period past it)."""
+    return round((math.floor(event.start_s / period_s + 1e-6) + 0.5) * period_s, 6)
 
 
 def absurd_residual(time_s: float) -> Residuals:
@@ -169,13 +185,20 @@ def main() -> int:
         graph.spin(60.0, until=lambda: residual_publisher.get_subscription_count() >= 1)
         memory_start = {executable: rss_mb(processes[(DIRTY, executable)].pid)
                         for _, executable in NODES}
-        replayer.play(flight, CLEAN, DIRTY, Corruptor(events, residual_publisher))
-        period_s = residual_update_period_s()
-        expected = round(arguments.duration / period_s)
         clean, dirty = estimates[f"{CLEAN}/faults/estimate"], estimates[f"{DIRTY}/faults/estimate"]
-        injected = sum(e.kind == "residual_1e300" for e in events)
+
+        def wait_for_estimate(stamp_s: float) -> None:
+            replayer.wait_for_acknowledgements()
+            graph.spin(30.0, until=lambda: any(
+                abs(stamp_seconds(m.header.stamp) - stamp_s) < 1e-6 for m in dirty[-20:]))
+
+        replayer.play(flight, CLEAN, DIRTY, Corruptor(events, residual_publisher,
+                                                      RESIDUAL_PERIOD_S, wait_for_estimate))
+        expected = round(arguments.duration / RESIDUAL_PERIOD_S)
+        injected = {injected_stamp(e, RESIDUAL_PERIOD_S) for e in events
+                    if e.kind == "residual_1e300"}
         graph.spin(120.0, until=lambda: len(clean) >= expected
-                   and len(dirty) >= expected + injected)
+                   and len(dirty) >= expected + len(injected))
         graph.spin(2.0)
         memory_end = {executable: rss_mb(processes[(DIRTY, executable)].pid)
                       for _, executable in NODES}
@@ -186,26 +209,32 @@ def main() -> int:
         lock.close()
     settle_s = (default_parameters("uav_fault_estimator", "residual_node.yaml")["recovery_s"]
                 + default_parameters("uav_fault_estimator", "mhe_node.yaml")["horizon"]
-                * period_s)
+                * RESIDUAL_PERIOD_S)
     clean_at = {round(stamp_seconds(m.header.stamp), 6): np.array(m.values_pct) for m in clean}
     dirty_at = {round(stamp_seconds(m.header.stamp), 6): np.array(m.values_pct) for m in dirty}
-    common = sorted(set(clean_at) & set(dirty_at))
+    grid = {round(k * RESIDUAL_PERIOD_S, 6) for k in range(1, expected + 1)}
+    common = sorted(set(clean_at) & set(dirty_at) & grid)
     outside = [t for t in common if not disturbed(t, events, settle_s)]
     inside = [t for t in common if disturbed(t, events, settle_s)]
 
-    def largest(stamps: list[float]) -> float | None:
-        return max((float(np.abs(dirty_at[t] - clean_at[t]).max()) for t in stamps),
-                   default=None)
+    def largest(stamps: list[float]) -> tuple[float, float] | None:
+        """The largest |dirty - clean| estimate [%] over stamps, and its stamp [s]."""
+        errors = [(float(np.abs(dirty_at[t] - clean_at[t]).max()), t) for t in stamps]
+        return max(errors, default=None)
 
     summary = {
         "duration_s": arguments.duration, "seed": arguments.seed, "events": len(events),
         "event_kinds": {k: sum(e.kind == k for e in events) for k in KINDS},
+        "event_times_s": {k: [round(e.start_s, 2) for e in events if e.kind == k]
+                          for k in KINDS},
         "estimates_expected": expected, "estimates_clean": len(clean),
-        "estimates_dirty": len(dirty), "residuals_injected": injected,
-        "messages_lost": (expected - len(clean)) + (expected + injected - len(dirty)),
+        "estimates_dirty": len(dirty), "residuals_injected": len(injected),
+        "estimates_lost_clean": sorted(grid - set(clean_at)),
+        "estimates_lost_dirty": sorted((grid | injected) - set(dirty_at)),
+        "estimates_unexpected": sorted((set(clean_at) - grid) | (set(dirty_at) - grid - injected)),
         "settle_s": settle_s, "stamps_outside": len(outside), "stamps_inside": len(inside),
-        "largest_error_outside_pct": largest(outside),
-        "largest_error_inside_pct": largest(inside),
+        "largest_error_outside_pct_at_s": largest(outside),
+        "largest_error_inside_pct_at_s": largest(inside),
         "memory_start_mb": memory_start, "memory_end_mb": memory_end, "wall_s": round(wall_s),
     }
     for key, value in summary.items():

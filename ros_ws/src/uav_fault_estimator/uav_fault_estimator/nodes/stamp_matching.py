@@ -31,7 +31,11 @@ class StampGuard:
     """
 
     confirm_stamps: int = 5
-    max_ahead_s: float = 10.0  # sensors every 0.05 s, residuals every 0.5 s: far beyond both
+    # Sensors every 0.05 s, residuals every 0.5 s: a jump of more than 2 s is no stream's
+    # next message. (Accepting one that is, say, 7 s ahead would make the real stream behind
+    # it look like strays until it counts as a restart: measured in scripts/soak.py.) A
+    # source silent for longer than this comes back as a restart.
+    max_ahead_s: float = 2.0
     newest_ns: int | None = None
     strays: set[int] = field(default_factory=set)
 
