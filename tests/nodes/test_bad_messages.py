@@ -93,6 +93,7 @@ def test_implausible_values_are_missing_values_and_the_residuals_come_back(
     assert len(clean_at) == expected and sorted(dirty_at) == sorted(clean_at)
     for message in dirty:
         assert np.all(np.isfinite(message.residual)) and np.all(np.abs(message.residual) < 1e3)
+        assert message.header.frame_id == "base_link_frd"  # rows in body axes (REP 103)
     health = latest_values(diagnostics, "/dirty/residual_node")
     # 40 samples of one value, 10 of one, 10 of three
     assert health["implausible_values"] == "80" and health["model_rebuilds"] == "0"
@@ -178,5 +179,6 @@ def test_absurd_body_rates_leave_the_detector_as_it_was(graph, start_process):
     for stamp_s, message in dirty_at.items():
         assert message.combined_alarm == clean_at[stamp_s].combined_alarm, stamp_s
     assert not any(m.combined_alarm for m in dirty)
+    assert {m.header.frame_id for m in dirty} == {"base_link_frd"}
     health = latest_values(diagnostics, "/dirty/detector_node")
     assert health["implausible_values"] == "30"  # 10 state messages, three rates each

@@ -13,7 +13,7 @@ import sys
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultAlarm
 from uav_sim.envelope import CONTROL_LIMITS, STATE_LIMITS
-from uav_sim.ros.messages import controls_array, header, state_array
+from uav_sim.ros.messages import BODY_FRAME, controls_array, header, state_array
 from uav_sim.ros.node_tools import (
     ERROR,
     OK,
@@ -78,7 +78,7 @@ class DetectorNode(Node):
 
     def message(self, sample: DetectorSample) -> FaultAlarm:
         return FaultAlarm(
-            header=header(sample.time_s),
+            header=header(sample.time_s, BODY_FRAME),
             channel_names=list(CHANNELS),
             statistic=sample.statistic.tolist(),
             threshold=sample.threshold.tolist(),

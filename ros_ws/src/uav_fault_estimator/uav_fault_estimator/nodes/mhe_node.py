@@ -12,7 +12,7 @@ from collections import deque
 import numpy as np
 from rclpy.node import Node
 from uav_fault_msgs.msg import FaultEstimate, Residuals
-from uav_sim.ros.messages import header, stamp_nanoseconds, stamp_seconds
+from uav_sim.ros.messages import BODY_FRAME, header, stamp_nanoseconds, stamp_seconds
 from uav_sim.ros.node_tools import (
     ERROR,
     OK,
@@ -145,7 +145,7 @@ class MheNode(Node):
         stamps = self.window_stamps_s
         published = result.columns(self.names)
         return FaultEstimate(
-            header=header(time_s),
+            header=header(time_s, BODY_FRAME),
             names=self.names,
             values_pct=result.fault_pct[published].tolist(),
             solver_status=int(result.status),

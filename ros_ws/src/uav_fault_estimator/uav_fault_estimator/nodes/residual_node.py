@@ -14,7 +14,14 @@ import time
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
 from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, WIND_LIMITS
-from uav_sim.ros.messages import air_data_array, controls_array, header, state_array, wind_array
+from uav_sim.ros.messages import (
+    BODY_FRAME,
+    air_data_array,
+    controls_array,
+    header,
+    state_array,
+    wind_array,
+)
 from uav_sim.ros.node_tools import (
     OK,
     STREAM_QOS,
@@ -112,7 +119,7 @@ class ResidualNode(Node):
 
     def message(self, sample: ResidualSample) -> Residuals:
         return Residuals(
-            header=header(sample.time_s),
+            header=header(sample.time_s, BODY_FRAME),
             residual=sample.residual.tolist(),
             observed=sample.observed.tolist(),
             predicted=sample.predicted.tolist(),

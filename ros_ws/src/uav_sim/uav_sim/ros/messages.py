@@ -24,8 +24,10 @@ from uav_sim.channels import (
 )
 from uav_sim.sample_grid import NANOSECONDS_PER_SECOND
 
-NED_FRAME = "ned"
-BODY_FRAME = "body"
+# Frame ids (REP 103 allows NED and FRD with suffixed names; REP 105's map and base_link):
+# the local North-East-Down frame, and the airframe's Forward-Right-Down body axes.
+NED_FRAME = "map_ned"
+BODY_FRAME = "base_link_frd"
 STATE_FIELDS = tuple(map(field_name, STATE_CHANNELS, STATE_UNITS))
 CONTROL_FIELDS = tuple(map(field_name, CONTROL_CHANNELS, CONTROL_UNITS))
 
