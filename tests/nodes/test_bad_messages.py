@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from flight_replay import FlightSample, Replayer, simulated_flight
 from ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import FaultAlarm, Residuals
@@ -49,12 +49,17 @@ def start_pair(start_process, graph, node: str = "residual_node",
     return received[f"{CLEAN}/{topic}"], received[f"{DIRTY}/{topic}"], diagnostics, replayer
 
 
-def latest_values(diagnostics: list[DiagnosticArray], node: str) -> dict[str, str]:
+def latest_status(diagnostics: list[DiagnosticArray], node: str) -> DiagnosticStatus | None:
     for array in reversed(diagnostics):
         for status in array.status:
             if status.name == node:
-                return {item.key: item.value for item in status.values}
-    return {}
+                return status
+    return None
+
+
+def latest_values(diagnostics: list[DiagnosticArray], node: str) -> dict[str, str]:
+    status = latest_status(diagnostics, node)
+    return {item.key: item.value for item in status.values} if status else {}
 
 
 def by_stamp(messages: list) -> dict[float, object]:
@@ -146,6 +151,12 @@ def test_stray_stamps_are_dropped_and_change_nothing(graph, start_process):
         assert np.array_equal(dirty_at[stamp_s].residual, message.residual), stamp_s
     health = latest_values(diagnostics, "/dirty/residual_node")
     assert health["stamp_resets"] == "0"
+    # the inputs have stopped: STALE within STALE_AFTER_S (5 s) and a diagnostics period
+    graph.spin(8.0, until=lambda: latest_status(diagnostics, "/dirty/residual_node").level
+               == DiagnosticStatus.STALE)
+    status = latest_status(diagnostics, "/dirty/residual_node")
+    assert status.level == DiagnosticStatus.STALE and status.message.startswith("no input")
+    assert status.hardware_id == "aerosonde/dirty"
     assert health["stray_stamps"] == "9"  # three strays on each of the three required streams
 
 

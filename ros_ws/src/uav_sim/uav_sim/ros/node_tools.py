@@ -8,6 +8,7 @@ import re
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, TypeVar
@@ -37,7 +38,13 @@ STREAM_QOS = QoSProfile(
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSTICS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
-OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+OK, WARN, ERROR, STALE = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR,
+                          DiagnosticStatus.STALE)
+# Wall time without a status update after which an input-driven node says STALE: its
+# inputs stopped (they arrive at 2-20 Hz of sim time, and the graph runs at or above real
+# time).
+STALE_AFTER_S = 5.0
+AIRCRAFT = "aerosonde"  # the hardware every node diagnoses; its namespace names the vehicle
 
 
 @dataclass(frozen=True)
@@ -153,17 +160,25 @@ def declare_parameters(
 
 
 class Diagnostics:
-    """Publishes the node's latest health on /diagnostics once a second of wall time.
+    """Publishes the node's latest health on /diagnostics once a second of wall time, with
+    the vehicle as hardware_id (`aerosonde`, or `aerosonde/uav1` in namespace /uav1).
 
     Wall time, not simulation time: health is for the people and tools watching the run.
+    A node driven by inputs (stale_after_s given) says STALE, with its last status's values,
+    once it has had no update for that long.
     """
 
-    def __init__(self, node: Node, period_s: float = 1.0) -> None:
+    def __init__(self, node: Node, period_s: float = 1.0,
+                 stale_after_s: float | None = STALE_AFTER_S) -> None:
         self._node = node
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", DIAGNOSTICS_QOS)
+        namespace = node.get_namespace()
         self._status = DiagnosticStatus(
-            level=OK, name=node.get_fully_qualified_name(), message="starting"
+            level=OK, name=node.get_fully_qualified_name(), message="starting",
+            hardware_id=AIRCRAFT + ("" if namespace == "/" else namespace),
         )
+        self._stale_after_s = stale_after_s
+        self._updated_s = time.monotonic()
         node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
     def update(self, level: bytes, message: str, values: dict[str, Any]) -> None:
@@ -171,9 +186,16 @@ class Diagnostics:
         self._status.level = level
         self._status.message = message
         self._status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
+        self._updated_s = time.monotonic()
 
     def publish(self) -> None:
-        array = DiagnosticArray(status=[self._status])
+        status, silent_s = self._status, time.monotonic() - self._updated_s
+        if self._stale_after_s is not None and silent_s > self._stale_after_s:
+            status = DiagnosticStatus(
+                level=STALE, name=status.name, hardware_id=status.hardware_id,
+                message=f"no input for {silent_s:.0f} s (last: {status.message})",
+                values=status.values)
+        array = DiagnosticArray(status=[status])
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)
 

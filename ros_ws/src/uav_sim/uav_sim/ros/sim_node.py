@@ -86,7 +86,7 @@ class SimNode(Node):
             self.air_data_publisher = self.create_publisher(AirData, "air_data", STREAM_QOS)
             self.stream_publishers.append(self.air_data_publisher)
         self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
-        self.diagnostics = Diagnostics(self)
+        self.diagnostics = Diagnostics(self, stale_after_s=None)  # a source: no inputs
         self.get_logger().info(
             f"scenario '{self.scenario.name}' from {scenario_path}: {self.scenario.duration_s:g} s "
             f"at {self.parameters['sensor_rate_hz']:g} Hz, real-time factor "
