@@ -149,7 +149,7 @@ def test_echo_once_with_timeout_of_a_missing_topic_fails_clearly(ros_graph) -> N
     waited_s = time.monotonic() - started
     assert result.returncode == 1
     assert result.stderr.strip().splitlines()[-1] == (
-        "no message received on [/no_such_topic] within 2.0 s"
+        "Could not determine the type for the passed topic [/no_such_topic] within 2.0 s"
     )
     assert "Traceback" not in result.stderr and waited_s >= 2.0
 

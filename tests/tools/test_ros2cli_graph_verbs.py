@@ -1,0 +1,344 @@
+"""The `ros2` stand-in's param, node info, topic info -v/pub/echo options/hz, against live
+processes, outputs checked field by field; interface show and bag info on installed files."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+from helpers.echo_output import echo_documents
+from helpers.samples import FRAME_ID, SAMPLE_FIELDS, topic_of
+from ros_processes import RosProcess, ros2_run_argv
+
+pytestmark = pytest.mark.integration
+
+REPO = Path(__file__).resolve().parents[2]
+MHE_CONFIG = REPO / "ros_ws/src/uav_fault_estimator/config/mhe_node.yaml"
+PUBLISHER = [sys.executable, "tests/helpers/sample_publisher.py"]
+CLOCK_PUBLISHER = [sys.executable, "tests/tools/clock_publisher.py"]
+
+
+def run_cli(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess:
+    return subprocess.run(["ros2", *args], capture_output=True, text=True, timeout=timeout_s)
+
+
+def mhe_defaults() -> dict:
+    return yaml.safe_load(MHE_CONFIG.read_text())["/**"]["ros__parameters"]
+
+
+@pytest.fixture
+def mhe_node(start_process, ros_graph) -> RosProcess:
+    """mhe_node, waiting for residuals: a node with the project's parameters."""
+    process = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
+    assert ros_graph.wait_for_topics(["/faults/estimate"], timeout_s=30), process.output()
+    return process
+
+
+@pytest.fixture
+def sample_publisher(start_process, ros_graph) -> RosProcess:
+    process = start_process(PUBLISHER, "sample_publisher")
+    topics = ["/" + topic_of(name) for name in SAMPLE_FIELDS]
+    assert ros_graph.wait_for_topics(topics, timeout_s=30), process.output()
+    return process
+
+
+# ------------------------------------------------------------------------------ param
+@pytest.mark.timeout(90)
+def test_param_list_get_dump_show_the_config_values(mhe_node) -> None:
+    defaults = mhe_defaults()
+    listing = run_cli("param", "list", "/mhe_node")
+    assert listing.returncode == 0, listing.stderr
+    lines = listing.stdout.splitlines()
+    assert lines == sorted(lines) and all(line.startswith("  ") for line in lines)
+    names = [line.strip() for line in lines]
+    assert set(defaults) | {"use_sim_time"} <= set(names), names
+
+    everyone = run_cli("param", "list")
+    assert "/mhe_node:" in everyone.stdout.splitlines()
+
+    typed = run_cli("param", "list", "mhe_node", "--param-type")
+    assert "  horizon (type: integer)" in typed.stdout.splitlines()
+    assert "  fault_names (type: string array)" in typed.stdout.splitlines()
+
+    expected_lines = {
+        "horizon": f"Integer value is: {defaults['horizon']}",
+        "noise_variance_factor": f"Double value is: {defaults['noise_variance_factor']}",
+        "arrival_centre": f"String value is: {defaults['arrival_centre']}",
+        "estimate_wind_errors": f"Boolean value is: {defaults['estimate_wind_errors']}",
+        "fault_names": f"String values are: {defaults['fault_names']}",
+        "prior_pct": f"Double values are: array('d', {defaults['prior_pct']})",
+    }
+    for name, line in expected_lines.items():
+        got = run_cli("param", "get", "/mhe_node", name)
+        assert (got.returncode, got.stdout) == (0, line + "\n"), (name, got.stdout, got.stderr)
+
+    dump = run_cli("param", "dump", "/mhe_node")
+    assert dump.returncode == 0, dump.stderr
+    assert dump.stdout.startswith("/mhe_node:\n  ros__parameters:\n")
+    dumped = yaml.safe_load(dump.stdout)["/mhe_node"]["ros__parameters"]
+    for name, value in defaults.items():
+        assert dumped[name] == value, name
+    assert dumped["use_sim_time"] is False
+
+
+@pytest.mark.timeout(90)
+def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
+    result = run_cli("param", "set", "/mhe_node", "horizon", "60")
+    assert result.returncode == 0, result.stderr
+    answer = (result.stdout + result.stderr).strip()
+    if result.stdout:  # the node took it
+        assert answer == "Set parameter successful"
+        got = run_cli("param", "get", "/mhe_node", "horizon")
+        assert got.stdout == "Integer value is: 60\n"
+    else:  # an on-set callback refused it: its reason, on stderr
+        assert re.fullmatch(r"Setting parameter failed: \S.*", answer), answer
+    wrong = run_cli("param", "set", "/mhe_node", "horizon", "many")
+    assert wrong.returncode == 0 and wrong.stdout == ""
+    assert re.fullmatch(r"Setting parameter failed: \S.*\n", wrong.stderr), wrong.stderr
+    print("param set answers:", answer, "|", wrong.stderr.strip())
+
+
+@pytest.mark.timeout(60)
+def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
+    missing_node = run_cli("param", "get", "/no_such_node", "horizon", "--spin-time", "1")
+    assert (missing_node.returncode, missing_node.stderr) == (1, "Node not found\n")
+    missing_param = run_cli("param", "get", "/mhe_node", "no_such_parameter")
+    assert missing_param.returncode == 1 and "Traceback" not in missing_param.stderr
+    assert missing_param.stderr == "Parameter not set\n" or missing_param.stdout == (
+        "Parameter not set.\n"
+    )
+
+
+# ----------------------------------------------------------------------- node info
+@pytest.mark.timeout(60)
+def test_node_info_lists_every_endpoint_section(mhe_node) -> None:
+    result = run_cli("node", "info", "/mhe_node")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    headers = ["  Subscribers:", "  Publishers:", "  Service Servers:", "  Service Clients:",
+               "  Action Servers:", "  Action Clients:"]
+    assert lines[0] == "/mhe_node"
+    positions = [lines.index(header) for header in headers]
+    assert positions == sorted(positions)
+    sections = {
+        header: lines[start + 1 : end]
+        for header, start, end in zip(headers, positions, [*positions[1:], len(lines)],
+                                      strict=True)
+    }
+    assert sections["  Subscribers:"] == ["    /residuals: uav_fault_msgs/msg/Residuals"]
+    assert "    /faults/estimate: uav_fault_msgs/msg/FaultEstimate" in sections["  Publishers:"]
+    assert "    /rosout: rcl_interfaces/msg/Log" in sections["  Publishers:"]
+    assert (
+        "    /mhe_node/set_parameters: rcl_interfaces/srv/SetParameters"
+        in sections["  Service Servers:"]
+    )
+    for empty in ("  Service Clients:", "  Action Servers:", "  Action Clients:"):
+        assert sections[empty] == [""], (empty, sections[empty])
+    unknown = run_cli("node", "info", "/no_such_node", "--spin-time", "1")
+    assert (unknown.returncode, unknown.stderr) == (1, "Unable to find node '/no_such_node'\n")
+
+
+# ---------------------------------------------------------------------- topic info -v
+@pytest.mark.timeout(60)
+def test_topic_info_verbose_prints_each_endpoint(mhe_node) -> None:
+    result = run_cli("topic", "info", "-v", "/faults/estimate")
+    assert result.returncode == 0, result.stderr
+    blocks = result.stdout.rstrip("\n").split("\n\n")
+    assert blocks[:2] == ["Type: uav_fault_msgs/msg/FaultEstimate", "Publisher count: 1"]
+    endpoint = blocks[2].splitlines()
+    assert endpoint[:3] == [
+        "Node name: mhe_node",
+        "Node namespace: /",
+        "Topic type: uav_fault_msgs/msg/FaultEstimate",
+    ]
+    assert re.fullmatch(r"Topic type hash: RIHS01_[0-9a-f]{64}", endpoint[3])
+    assert endpoint[4] == "Endpoint type: PUBLISHER"
+    assert re.fullmatch(r"GID: ([0-9a-f]{2}\.){15}[0-9a-f]{2}", endpoint[5]), endpoint[5]
+    assert endpoint[6] == "QoS profile:"
+    assert endpoint[7] == "  Reliability: RELIABLE"
+    assert endpoint[8].startswith("  History (Depth): ")
+    assert endpoint[9:] == [
+        "  Durability: VOLATILE",
+        "  Lifespan: Infinite",
+        "  Deadline: Infinite",
+        "  Liveliness: AUTOMATIC",
+        "  Liveliness lease duration: Infinite",
+    ]
+    assert blocks[3] == "Subscription count: 0" and len(blocks) == 4
+
+
+# ---------------------------------------------------------------------------- pub
+@pytest.mark.timeout(60)
+def test_topic_pub_once_reaches_an_echo(start_process, ros_graph) -> None:
+    echo = start_process(["ros2", "topic", "echo", "/cli_pub_test", "--once"], "echo_pub")
+    time.sleep(1.0)
+    result = run_cli(
+        "topic", "pub", "--once", "/cli_pub_test", "uav_fault_msgs/msg/FaultVector",
+        "{header: {frame_id: ned}, names: [a, b], values_pct: [1.5, 2]}",
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert "publisher: beginning loop" in lines and lines[-1] == ""  # ros2cli's blank line
+    assert lines[-2].startswith("publishing #1: uav_fault_msgs.msg.FaultVector(header=")
+    assert echo.wait(timeout_s=30) == 0, echo.output()
+    document = echo_documents(echo.output())[0]
+    assert document["header"]["frame_id"] == "ned"
+    assert (document["names"], document["values_pct"]) == (["a", "b"], [1.5, 2.0])
+
+
+@pytest.mark.timeout(60)
+def test_topic_pub_times_and_bad_values(ros_graph) -> None:
+    times = run_cli("topic", "pub", "-t", "3", "-r", "20", "-w", "0", "/cli_pub_times",
+                    "std_msgs/msg/String", "{data: hi}")
+    assert times.returncode == 0, times.stderr
+    assert re.findall(r"publishing #(\d+): std_msgs.msg.String\(data='hi'\)", times.stdout) == [
+        "1", "2", "3"
+    ]
+    bad_field = run_cli("topic", "pub", "--once", "-w", "0", "/cli_pub_times",
+                        "std_msgs/msg/String", "{dat: hi}")
+    assert (bad_field.returncode, bad_field.stderr) == (
+        1, "Failed to populate field: 'String' object has no attribute 'dat'\n"
+    )
+    not_a_mapping = run_cli("topic", "pub", "--once", "/cli_pub_times", "std_msgs/msg/String",
+                            "[1]")
+    assert (not_a_mapping.returncode, not_a_mapping.stderr) == (
+        1, "The passed value needs to be a dictionary in YAML format\n"
+    )
+
+
+# ------------------------------------------------------------------ echo options
+@pytest.mark.timeout(60)
+def test_echo_no_arr_and_truncate_length(sample_publisher) -> None:
+    topic = topic_of("FaultEstimate")
+    no_arr = run_cli("topic", "echo", topic, "--once", "--no-arr")
+    document = echo_documents(no_arr.stdout)[0]
+    assert document["names"] == "<sequence type: string, length: 1>"
+    assert document["window_values_pct"] == "<sequence type: double, length: 3>"
+    assert document["horizon"] == SAMPLE_FIELDS["FaultEstimate"]["horizon"]
+    truncated = run_cli("topic", "echo", topic, "--once", "--truncate-length", "2")
+    document = echo_documents(truncated.stdout)[0]
+    assert document["window_values_pct"] == [9.0, 9.25, "..."]
+    assert document["values_pct"] == [9.5]
+    assert document["header"]["frame_id"] == (
+        FRAME_ID[:2] + "..." if len(FRAME_ID) > 2 else FRAME_ID
+    )
+
+
+@pytest.mark.timeout(60)
+def test_echo_timeout_ends_with_status_0_like_ros2cli(sample_publisher, mhe_node) -> None:
+    started = time.monotonic()
+    silent = run_cli("topic", "echo", "/faults/estimate", "--timeout", "2")
+    assert (silent.returncode, silent.stdout) == (0, "")
+    assert 2.0 <= time.monotonic() - started < 15
+    talking = run_cli("topic", "echo", topic_of("Residuals"), "--timeout", "2")
+    assert talking.returncode == 0 and len(echo_documents(talking.stdout)) >= 5
+
+
+# ------------------------------------------------------------------------------- hz
+@pytest.mark.timeout(60)
+def test_hz_times_on_wall_time_or_on_clock_with_use_sim_time(start_process, ros_graph) -> None:
+    start_process(CLOCK_PUBLISHER, "clock_publisher")
+    assert ros_graph.wait_for_topics(["/clock", "/sim_ticks"], timeout_s=30)
+    wall = start_process(["ros2", "topic", "hz", "/sim_ticks"], "hz_wall")
+    sim = start_process(["ros2", "topic", "hz", "--use-sim-time", "/sim_ticks"], "hz_sim")
+    time.sleep(6.0)
+    rates = {}
+    for name, process in (("wall", wall), ("sim", sim)):
+        assert process.stop() == 0, process.output()
+        rates[name] = [float(v) for v in re.findall(r"average rate: ([0-9.]+)", process.output())]
+        assert rates[name] and "Traceback" not in process.output(), process.output()
+    print("hz on wall time and on /clock:", rates)
+    assert rates["wall"][-1] == pytest.approx(40.0, rel=0.15)
+    assert rates["sim"][-1] == pytest.approx(20.0, rel=0.15)
+
+
+# ------------------------------------------------------------------ graph settling
+@pytest.mark.timeout(60)
+def test_graph_queries_return_once_discovery_settles(sample_publisher, mhe_node) -> None:
+    durations = []
+    for _ in range(3):
+        started = time.monotonic()
+        nodes = run_cli("node", "list")
+        durations.append(time.monotonic() - started)
+        assert nodes.stdout.splitlines() == ["/mhe_node", "/sample_publisher"], nodes.stdout
+    print("ros2 node list took", [f"{d:.2f} s" for d in durations])
+    assert min(durations) < 2.0  # the upper bound (--spin-time 2) plus start-up is 2.5 s
+
+
+# ------------------------------------------------------------- files: interface, bag
+@pytest.mark.timeout(30)
+def test_interface_show_prints_the_definition_with_nested_types() -> None:
+    header = run_cli("interface", "show", "std_msgs/msg/Header")
+    assert header.returncode == 0, header.stderr
+    assert header.stdout.splitlines()[-6:] == [
+        "builtin_interfaces/Time stamp",
+        "\tint32 sec",
+        "\tuint32 nanosec",
+        "",
+        "# Transform frame with which this data is associated.",
+        "string frame_id",
+    ]
+    estimate = run_cli("interface", "show", "uav_fault_msgs/msg/FaultEstimate")
+    from ament_index_python.packages import get_package_share_directory
+
+    installed = Path(get_package_share_directory("uav_fault_msgs")) / "msg/FaultEstimate.msg"
+    source = installed.read_text().splitlines()
+    lines = estimate.stdout.splitlines()
+    header_at = lines.index(next(line for line in lines if line.startswith("std_msgs/Header")))
+    assert lines[header_at + 1 : header_at + 5] == [
+        "\tbuiltin_interfaces/Time stamp", "\t\tint32 sec", "\t\tuint32 nanosec",
+        "\tstring frame_id",
+    ]
+    assert lines[: header_at + 1] + lines[header_at + 5 :] == [s.rstrip() for s in source]
+    unknown = run_cli("interface", "show", "uav_fault_msgs/msg/NoSuchType")
+    assert unknown.returncode == 1 and "Could not find the interface" in unknown.stderr
+
+
+@pytest.mark.timeout(30)
+def test_bag_info_of_a_recording(tmp_path) -> None:
+    from uav_fault_estimator.analysis.recording import Recording, project_typestore
+
+    typestore = project_typestore()
+    clock_type = typestore.types["rosgraph_msgs/msg/Clock"]
+    time_type = typestore.types["builtin_interfaces/msg/Time"]
+    start_ns = 1_796_186_936_005_000_000  # a fraction with leading zeros
+    recording = Recording(tmp_path / "bag", typestore)
+    recording.add_topic("/clock", "rosgraph_msgs/msg/Clock")
+    recording.add_topic("/faults/estimate", "uav_fault_msgs/msg/FaultEstimate")
+    for step in range(3):
+        stamp = time_type(sec=step, nanosec=0)
+        data = typestore.serialize_cdr(clock_type(clock=stamp), "rosgraph_msgs/msg/Clock")
+        recording.write("/clock", start_ns + step * 500_000_000, bytes(data))
+    recording.close()
+
+    result = run_cli("bag", "info", str(tmp_path / "bag"))
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    size = (tmp_path / "bag" / "bag.mcap").stat().st_size
+    end_ns = start_ns + 1_000_000_000
+    clock = time.strftime("%b %e %Y %H:%M:%S", time.localtime(start_ns // 10**9))
+    end_clock = time.strftime("%b %e %Y %H:%M:%S", time.localtime(end_ns // 10**9))
+    assert lines == [
+        "",
+        "Files:             bag.mcap",
+        f"Bag size:          {size / 1024:.1f} KiB" if size >= 1024 else f"{size} B",
+        "Storage id:        mcap",
+        "ROS Distro:        rosbags",
+        "Duration:          1.000000000s",
+        f"Start:             {clock}.005000000 (1796186936.005000000)",
+        f"End:               {end_clock}.005000000 (1796186937.005000000)",
+        "Messages:          3",
+        "Topic information: Topic: /clock | Type: rosgraph_msgs/msg/Clock | Count: 3 | "
+        "Serialization Format: cdr",
+        "                   Topic: /faults/estimate | Type: uav_fault_msgs/msg/FaultEstimate"
+        " | Count: 0 | Serialization Format: cdr",
+        "Service:           0",
+        "Service information: ",
+    ]
+    missing = run_cli("bag", "info", str(tmp_path / "nothing"))
+    assert missing.returncode == 1 and "Traceback" not in missing.stderr
