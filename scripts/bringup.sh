@@ -76,6 +76,8 @@ start_node() {
     [ -n "$ns" ] && ros_args+=(-r "__ns:=$ns")
     [ -n "$params" ] && ros_args+=(--params-file "$params")
     [ "$name" = sim_node ] && [ -n "$scenario" ] && ros_args+=(-p "scenario:=$scenario")
+    # every node but the simulator runs on its /clock
+    [ "$name" != sim_node ] && ros_args+=(-p use_sim_time:=true)
     if [ ${#ros_args[@]} -gt 0 ]; then
         ros_args=(--ros-args "${ros_args[@]}")
     fi

@@ -39,6 +39,7 @@ from typing import Any
 import yaml
 from report import write_report
 from ros_processes import (
+    SIM_TIME_ROS_ARGS,
     RosProcess,
     exit_status_text,
     fast_flight_ros_args,
@@ -149,6 +150,9 @@ class Demo:
         self.expected = round(scenario.duration_s / residual_update_period_s())
 
     def start(self, package: str, executable: str, ros_args: list[str]) -> RosProcess:
+        """Start a node; every one but sim_node on sim_node's /clock."""
+        if executable != "sim_node":
+            ros_args = [*ros_args, *SIM_TIME_ROS_ARGS]
         process = RosProcess(ros2_run_argv(package, executable, ros_args),
                              self.logs / f"{executable}.log")
         self.nodes[executable] = process

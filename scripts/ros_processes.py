@@ -102,6 +102,10 @@ def fast_flight_ros_args(scenario: Path | str, subscribers: int) -> list[str]:
             "-p", f"wait_for_subscribers:={subscribers}"]
 
 
+# The graph's nodes other than sim_node run on its /clock (simulation time).
+SIM_TIME_ROS_ARGS = ("-p", "use_sim_time:=true")
+
+
 def wait_until(predicate: Callable[[], object], timeout_s: float, poll_s: float = 0.1) -> bool:
     """Poll predicate() until it is true or timeout_s passes; whether it became true."""
     deadline = time.monotonic() + timeout_s

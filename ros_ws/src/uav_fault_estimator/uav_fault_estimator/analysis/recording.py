@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from rosbags.interfaces import Qos
 from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -46,12 +47,15 @@ class Recording:
         self.connections: dict[str, object] = {}
         self.counts: dict[str, int] = {}
 
-    def add_topic(self, topic: str, message_type: str) -> None:
-        """Register a topic; ValueError for a type the type store does not know."""
+    def add_topic(self, topic: str, message_type: str,
+                  offered_qos: Sequence[Qos] = ()) -> None:
+        """Register a topic with its publishers' QoS profiles (metadata.yaml's
+        offered_qos_profiles, what `ros2 bag play` offers again); ValueError for a type the
+        type store does not know."""
         if message_type not in self.typestore.fielddefs:
             raise ValueError(f"no definition of {message_type} for topic {topic}")
         self.connections[topic] = self.writer.add_connection(
-            topic, message_type, typestore=self.typestore)
+            topic, message_type, typestore=self.typestore, offered_qos_profiles=offered_qos)
         self.counts[topic] = 0
 
     def write(self, topic: str, timestamp_ns: int, data: bytes) -> None:
