@@ -8,11 +8,14 @@ from their .msg definitions; the standard ones come with rosbags' ROS 2 Jazzy ty
 
 from __future__ import annotations
 
+import contextlib
 import struct
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+import yaml
 from rosbags.interfaces import Qos
 from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
 from rosbags.serde import SerdeError
@@ -46,6 +49,9 @@ class Recording:
         self.writer.open()
         self.connections: dict[str, object] = {}
         self.counts: dict[str, int] = {}
+        # per topic, the wall clock of its first and last message [ns] (the log times may be
+        # sim time): metadata.yaml's custom_data at close
+        self.wall_span_ns: dict[str, list[int]] = {}
 
     def add_topic(self, topic: str, message_type: str,
                   offered_qos: Sequence[Qos] = ()) -> None:
@@ -62,15 +68,21 @@ class Recording:
         """One serialized (CDR) message of a registered topic at timestamp_ns."""
         self.writer.write(self.connections[topic], timestamp_ns, data)
         self.counts[topic] += 1
+        now_ns = time.time_ns()
+        self.wall_span_ns.setdefault(topic, [now_ns, now_ns])[1] = now_ns
 
     def close(self) -> None:
         """Finish the files: summary and metadata.yaml. Safe to call twice."""
         if self.writer is not None:
+            for topic, (first_ns, last_ns) in self.wall_span_ns.items():
+                self.writer.set_custom_data(WALL_SPAN_KEY + topic, f"{first_ns} {last_ns}")
             self.writer.close()
             self.writer = None
 
 
-RECEIVED_NS = "received_ns"  # the key of read_topics' receive times
+WALL_S = "wall_s"  # the key of read_topics' wall time the recording spans [s]
+# metadata.yaml custom_data, per topic: "<first> <last>", its messages' wall clock [ns]
+WALL_SPAN_KEY = "uav.wall_span_ns:"
 
 
 class RecordingError(ValueError):
@@ -87,7 +99,7 @@ _DAMAGED = (ReaderError, SerdeError, OSError, ValueError, TypeError, AttributeEr
 
 def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dict[str, list]:
     """The decoded messages of each topic of a recording, in recording order, and under
-    RECEIVED_NS the receive times [ns] of all of them. RecordingError (one line naming the
+    WALL_S the wall time the recording spans [s] (wall_span_s). RecordingError (one line naming the
     recording) when it is not a rosbag2 folder or cannot be read or decoded."""
     bag = Path(bag)
     if not bag.is_dir():
@@ -111,8 +123,22 @@ def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dic
         reason = " ".join(str(error).split()) or type(error).__name__
         raise RecordingError(
             f"recording {bag}: unreadable, damaged or not rosbag2 ({reason})") from None
-    messages[RECEIVED_NS] = received_ns
+    messages[WALL_S] = wall_span_s(bag, topics, received_ns)
     return messages
+
+
+def wall_span_s(bag: Path, topics: tuple[str, ...], received_ns: list[int]) -> float:
+    """The wall time the topics' messages span in a recording [s]: from metadata.yaml's
+    custom_data where the recorder wrote it, else from their log times (a recording made
+    on wall time)."""
+    with contextlib.suppress(OSError, yaml.YAMLError, KeyError, TypeError, ValueError):
+        custom = yaml.safe_load((bag / "metadata.yaml").read_text())[
+            "rosbag2_bagfile_information"]["custom_data"]
+        spans = [[int(v) for v in custom[WALL_SPAN_KEY + topic].split()] for topic in topics
+                 if WALL_SPAN_KEY + topic in custom]
+        if spans:
+            return 1e-9 * (max(last for _, last in spans) - min(first for first, _ in spans))
+    return 1e-9 * (max(received_ns) - min(received_ns)) if received_ns else 0.0
 
 
 def flight_from_recording(bag: Path, typestore: Typestore,

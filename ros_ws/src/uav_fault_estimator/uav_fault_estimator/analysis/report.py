@@ -20,7 +20,7 @@ from uav_fault_estimator.analysis.metrics import (
     fault_metrics,
     solver_metrics,
 )
-from uav_fault_estimator.analysis.recording import RECEIVED_NS, RecordingError
+from uav_fault_estimator.analysis.recording import WALL_S, RecordingError
 
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
@@ -50,7 +50,6 @@ def run_from(messages: dict[str, list], bag: Path) -> Run:
     if missing:
         raise RecordingError(f"recording {bag}: no messages on {', '.join(missing)}")
     estimates, seeded = messages[ESTIMATE_TOPIC], messages[SEEDED_TOPIC]
-    received_ns = messages[RECEIVED_NS]
     return Run(
         estimates=EstimateSeries(
             names=list(estimates[0].names),
@@ -65,7 +64,7 @@ def run_from(messages: dict[str, list], bag: Path) -> Run:
             values_pct=np.array([m.values_pct for m in seeded]),
         ),
         duration_s=stamp_seconds(messages[STATE_TOPIC][-1].header.stamp),
-        wall_s=1e-9 * (max(received_ns) - min(received_ns)),
+        wall_s=messages[WALL_S],
         alarms=alarm_series(messages.get(ALARM_TOPIC) or []),
     )
 
