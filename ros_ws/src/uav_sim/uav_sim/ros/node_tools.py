@@ -110,7 +110,10 @@ def checked_value(name: str, value: Any, kind: Parameter.Type, spec: ParameterSp
 
 
 def _descriptor(kind: Parameter.Type, spec: ParameterSpec) -> ParameterDescriptor:
-    descriptor = ParameterDescriptor(description=spec.description, type=kind.value)
+    # Read-only: every node reads its parameters once, at start, so a change at run time
+    # could not be honoured; `ros2 param set` is refused with that reason, never ignored.
+    descriptor = ParameterDescriptor(description=spec.description, type=kind.value,
+                                     read_only=True)
     if spec.range_text():
         if kind == Parameter.Type.DOUBLE:
             descriptor.floating_point_range = [
