@@ -3,37 +3,28 @@
 import sys
 from pathlib import Path
 
-import rclpy
-from rclpy.executors import ExternalShutdownException
-
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from helpers.fixture_node import run_timer_node
 from helpers.samples import SAMPLE_FIELDS, build_sample, topic_of
 
 PERIOD_S = 0.1
 
 
-def main() -> None:
-    rclpy.init()
-    node = rclpy.create_node("sample_publisher")
-    samples = [
-        (node.create_publisher(type(message), topic_of(name), 10), message)
-        for name in SAMPLE_FIELDS
-        for message in [build_sample(name)]
-    ]
+def publishers(node):
+    """Every sample message with its publisher: the tick publishes them all."""
+    samples = [(node.create_publisher(type(message), topic_of(name), 10), message)
+               for name in SAMPLE_FIELDS for message in [build_sample(name)]]
 
     def publish_all() -> None:
         for publisher, message in samples:
             publisher.publish(message)
 
-    node.create_timer(PERIOD_S, publish_all)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    return publish_all
+
+
+def main() -> None:
+    run_timer_node("sample_publisher", PERIOD_S, publishers)
 
 
 if __name__ == "__main__":
