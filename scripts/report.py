@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """metrics.json (DESIGN.md) and the figures of a recorded run; the metrics as a table.
 
-    python scripts/report.py BAG [--out DIR] [--scenario NAME]
+    python scripts/report.py BAG [--out DIR] [--scenario NAME] [--ns NS]
 
 BAG: a rosbag2 directory recorded by recorder_node. DIR (default: BAG's parent) receives
 metrics.json and the figures (PNG: states, track, wind, residuals, sensitivity,
-estimates). NAME defaults to DIR's folder name (demo runs live in runs/<scenario>/).
+estimates). NAME defaults to DIR's folder name (demo runs live in runs/<scenario>/). NS: the
+namespace the run's nodes had (bringup.sh --ns), e.g. /uav1.
 
 Exit status: 0 written; 2 a recording that is not a rosbag2 folder, cannot be read or
 decoded (truncated, empty, damaged) or lacks a stream the metrics need, or an output folder
@@ -27,15 +28,17 @@ from uav_fault_estimator.analysis.recording import (
 )
 
 
-def write_report(bag: Path, out: Path, scenario: str) -> tuple[dict, list[Path]]:
-    """Write metrics.json and the figures of the recording BAG into OUT: (metrics, figures).
+def write_report(bag: Path, out: Path, scenario: str,
+                 namespace: str = "") -> tuple[dict, list[Path]]:
+    """Write metrics.json and the figures of the recording BAG (of the nodes under namespace,
+    "" for none) into OUT: (metrics, figures).
 
     RecordingError (a ValueError, one line naming the bag) when the recording cannot be
     read or lacks a stream; OSError when OUT cannot be written.
     """
     typestore = project_typestore()
     # one pass over the recording for the metrics and the figures
-    messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS))
+    messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS), namespace)
     metrics = report.run_metrics(report.run_from(messages, bag), scenario)
     out.mkdir(parents=True, exist_ok=True)
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
@@ -47,11 +50,12 @@ def main() -> int:
     parser.add_argument("bag", type=Path)
     parser.add_argument("--out", type=Path)
     parser.add_argument("--scenario")
+    parser.add_argument("--ns", default="", help="the nodes' namespace, e.g. /uav1")
     arguments = parser.parse_args()
     out = arguments.out or arguments.bag.resolve().parent
     try:
         metrics, written = write_report(
-            arguments.bag, out, arguments.scenario or out.resolve().name)
+            arguments.bag, out, arguments.scenario or out.resolve().name, arguments.ns)
     except RecordingError as error:
         print(f"report.py: {error}", file=sys.stderr)
         return 2

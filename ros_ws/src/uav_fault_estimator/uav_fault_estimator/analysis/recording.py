@@ -97,10 +97,13 @@ _DAMAGED = (ReaderError, SerdeError, OSError, ValueError, TypeError, AttributeEr
             struct.error, OverflowError, IndexError, KeyError, MemoryError)
 
 
-def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dict[str, list]:
+def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...],
+                namespace: str = "") -> dict[str, list]:
     """The decoded messages of each topic of a recording, in recording order, and under
     WALL_S the wall time the recording spans [s] (wall_span_s). RecordingError (one line naming the
-    recording) when it is not a rosbag2 folder or cannot be read or decoded."""
+    recording) when it is not a rosbag2 folder or cannot be read or decoded. namespace
+    ("/uav1"): read the topics under it (a namespaced run), keyed by their names without it
+    (/clock stays global)."""
     bag = Path(bag)
     if not bag.is_dir():
         raise RecordingError(f"recording {bag}: " + (
@@ -112,19 +115,25 @@ def read_topics(bag: Path, typestore: Typestore, topics: tuple[str, ...]) -> dic
     received_ns: list[int] = []
     try:
         with Reader(bag) as reader:
-            wanted = [c for c in reader.connections if c.topic in messages]
+            recorded = {in_namespace(topic, namespace): topic for topic in topics}
+            wanted = [c for c in reader.connections if c.topic in recorded]
             # rosbags reads every connection when given none
             for connection, timestamp_ns, raw in (
                     reader.messages(connections=wanted) if wanted else ()):
-                messages[connection.topic].append(
+                messages[recorded[connection.topic]].append(
                     typestore.deserialize_cdr(raw, connection.msgtype))
                 received_ns.append(timestamp_ns)
     except _DAMAGED as error:
         reason = " ".join(str(error).split()) or type(error).__name__
         raise RecordingError(
             f"recording {bag}: unreadable, damaged or not rosbag2 ({reason})") from None
-    messages[WALL_S] = wall_span_s(bag, topics, received_ns)
+    messages[WALL_S] = wall_span_s(bag, tuple(recorded), received_ns)
     return messages
+
+
+def in_namespace(topic: str, namespace: str) -> str:
+    """An absolute topic name under a namespace ("" or "/": none); /clock is global."""
+    return topic if topic == "/clock" else namespace.rstrip("/") + topic
 
 
 def wall_span_s(bag: Path, topics: tuple[str, ...], received_ns: list[int]) -> float:
