@@ -61,8 +61,7 @@ def sample_normal_equations(
     keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
         return np.zeros((p, p)), np.zeros(p), False, False
-    with np.errstate(invalid="ignore", over="ignore"):
-        plausible = np.abs(y) * np.sqrt(q_inv) <= RESIDUAL_PLAUSIBLE_SIGMAS
+    plausible = np.abs(y) <= RESIDUAL_PLAUSIBLE_SIGMAS / np.sqrt(q_inv)  # NaN: False
     finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1) & plausible
     weight = np.where(keep & finite, q_inv, 0.0)
     gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],

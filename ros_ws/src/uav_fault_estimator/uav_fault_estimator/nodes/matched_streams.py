@@ -12,10 +12,25 @@ from uav_sim.envelope import gate
 from uav_sim.ros.messages import stamp_nanoseconds
 from uav_sim.ros.node_tools import STREAM_QOS
 
-from uav_fault_estimator.nodes.stamp_matching import StampMatcher, StampVerdict
+from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampMatcher, StampVerdict
 
 # (message type, message -> array, the array's envelope (low, high) arrays) per topic
 Streams = dict[str, tuple[type, Callable[[Any], Any], tuple[np.ndarray, np.ndarray]]]
+
+
+def checked_stamp(node: Node, guard: StampGuard, topic: str, stamp_ns: int,
+                  restart_note: str) -> StampVerdict:
+    """guard.check(stamp_ns), said on the node's log: a stray (at most every 5 s) and a
+    restart (ending with restart_note: what the caller does about it)."""
+    verdict = guard.check(stamp_ns)
+    if verdict is StampVerdict.STRAY:
+        node.get_logger().warning(
+            f"{topic} stamp {stamp_ns / 1e9:.3f} s is out of order (a duplicate, one going "
+            "backwards or far ahead): message dropped", throttle_duration_sec=5.0)
+    elif verdict is StampVerdict.RESTART:
+        node.get_logger().warning(f"{topic} stamps restarted at {stamp_ns / 1e9:.3f} s: the "
+                                  f"source restarted, {restart_note}")
+    return verdict
 
 
 class MatchedStreams:
@@ -72,17 +87,12 @@ class MatchedStreams:
     def receive(self, topic: str, message: Any) -> None:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
         if topic in self.matcher.streams:
-            verdict = self.matcher.guard.check(stamp_ns)
+            verdict = checked_stamp(self.node, self.matcher.guard, topic, stamp_ns,
+                                    self.restart_note)
             if verdict is StampVerdict.STRAY:
                 self.stray_messages += 1
-                self.node.get_logger().warning(
-                    f"{topic} stamp {stamp_ns / 1e9:.3f} s is out of order (a duplicate, one "
-                    "going backwards or far ahead): message dropped", throttle_duration_sec=5.0)
                 return
             if verdict is StampVerdict.RESTART:
-                self.node.get_logger().warning(
-                    f"{topic} stamps restarted at {stamp_ns / 1e9:.3f} s: the source restarted,"
-                    f" {self.restart_note}")
                 self.matcher.reset()
                 self.restarts += 1
                 self.on_restart()

@@ -30,6 +30,7 @@ from uav_fault_estimator.estimation.estimator_config import (
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.estimation.solve_status import SolveStatus
+from uav_fault_estimator.nodes.matched_streams import checked_stamp
 from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampVerdict
 
 # Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
@@ -101,17 +102,11 @@ class MheNode(Node):
     def on_residuals(self, message: Residuals) -> None:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
         time_s = stamp_seconds(message.header.stamp)
-        verdict = self.stamps.check(stamp_ns)
+        verdict = checked_stamp(self, self.stamps, "residuals", stamp_ns, "estimator reset")
         if verdict is StampVerdict.STRAY:
             self.counts["stray_stamps"] += 1
-            self.get_logger().warning(
-                f"residual stamp {time_s:.3f} s is out of order (a duplicate, one going "
-                "backwards or far ahead): dropped", throttle_duration_sec=5.0)
             return
         if verdict is StampVerdict.RESTART:
-            self.get_logger().warning(
-                f"residual stamps restarted at {time_s:.3f} s: the source restarted, "
-                "estimator reset")
             self.estimator.reset()
             self.window_stamps_s.clear()
             self.counts["stamp_resets"] += 1
