@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 import pytest
 from ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_msgs.msg import FaultEstimate
+from uav_fault_msgs.msg import FaultEstimate, Residuals
 from uav_sim.channels import PAPER_FAULT_NAMES
 from uav_sim.ros.messages import stamp_seconds
 from uav_sim.ros.node_tools import STREAM_QOS
@@ -30,6 +30,11 @@ def test_estimates_follow_the_residuals_and_find_a_lift_loss(short_scenario, gra
     start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
     assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
+    # residual_node's publisher known in the graph (mhe_node matches it about when this
+    # node does) before the flight starts: else the first residuals may find no subscriber
+    graph.subscribe({"/residuals": Residuals}, STREAM_QOS)
+    assert graph.wait_for_publishers("/residuals", 1, timeout_s=30)
+    graph.spin(1.0)
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
         scenario, subscribers=1)), "sim_node")
