@@ -54,6 +54,13 @@ class RosGraph:
                   >= count)
         return self.subscriptions[topic].get_publisher_count() >= count
 
+    def wait_for_subscribers(self, topic: str, count: int, timeout_s: float) -> bool:
+        """Whether the graph holds at least count subscriptions of topic (absolute name, this
+        node's own included) within timeout_s: a recorder that subscribes once a topic has a
+        publisher is in the graph before the first message is sent."""
+        self.spin(timeout_s, until=lambda: self.node.count_subscribers(topic) >= count)
+        return self.node.count_subscribers(topic) >= count
+
     def spin(self, duration_s: float, until: Any = None) -> None:
         """Process callbacks for duration_s, or until until() is true."""
         deadline = time.monotonic() + duration_s

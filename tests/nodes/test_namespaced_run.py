@@ -34,8 +34,12 @@ def test_a_namespaced_run_is_reported_with_its_namespace(short_scenario, start_p
     start_process(ros2_run_argv("uav_fault_estimator", "mhe_node", ros_args=in_namespace),
                   "mhe_node")
     assert graph.wait_for_publishers(f"{NAMESPACE}/faults/estimate", 1, timeout_s=30)
+    # this test's subscription and the recorder's, before the first estimate
+    assert graph.wait_for_subscribers(f"{NAMESPACE}/faults/estimate", 2, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node",
                                 ros_args=in_namespace), "residual_node")
+    # mhe_node's subscription and the recorder's, before the first residual
+    assert graph.wait_for_subscribers(f"{NAMESPACE}/residuals", 2, timeout_s=30)
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
         *in_namespace, *fast_flight_ros_args(short_scenario(DURATION_S), subscribers=2)]),
         "sim_node")

@@ -45,7 +45,11 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     assert wait_until(lambda: bag.exists() or not recorder.running(), timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
     assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
+    # this test's subscription and the recorder's, before the first estimate
+    assert graph.wait_for_subscribers("/faults/estimate", 2, timeout_s=30)
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
+    # mhe_node's subscription and the recorder's, before the first residual
+    assert graph.wait_for_subscribers("/residuals", 2, timeout_s=30)
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
         scenario, subscribers=2)), "sim_node")  # residual_node and the recorder
