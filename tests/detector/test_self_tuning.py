@@ -136,3 +136,18 @@ def test_detector_skips_non_finite_samples_and_keeps_its_parameters():
     state[9] = math.nan  # roll rate lost
     assert detector.update(0.4, state, controls) is None
     assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in CHANNELS)
+
+
+@pytest.mark.timeout(30)
+def test_a_new_false_alarm_probability_moves_the_thresholds_and_keeps_the_generators():
+    detector = SelfTuningDetector(small_calibration(), false_alarm_probability=0.01)
+    state, controls = np.zeros(14), np.zeros(7)
+    for k in range(5):
+        detector.update(0.2 * k, state, controls)
+    theta = {name: rls.theta.copy() for name, rls in detector.rls.items()}
+    detector.set_false_alarm_probability(1e-4)
+    assert detector.thresholds == pytest.approx([2.0 * (-math.log(1e-4)) ** (1 / 1.5)] * 3)
+    assert detector.parameter_threshold == pytest.approx(1.5 * (-math.log(1e-4)) ** (1 / 2.5))
+    assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in CHANNELS)
+    sample = detector.update(1.0, state, controls)
+    assert sample is not None and sample.threshold == pytest.approx(detector.thresholds)

@@ -225,3 +225,32 @@ def test_integers_for_reals_fly(short_scenario, tmp_path):
     assert result.returncode == 0, result
     assert "1 s at 20 Hz, real-time factor 0" in result.stderr + result.stdout, result
     assert "finished at 1 s of simulation time" in result.stderr + result.stdout, result
+
+
+@pytest.mark.timeout(30)
+def test_a_live_parameter_goes_to_the_node_checked_and_a_refusal_keeps_the_value(context):
+    node = Node("detector_node", context=context)
+    applied = []
+
+    def apply_changes(changes: dict) -> None:
+        if changes["false_alarm_probability"] > 0.1:
+            raise ParameterError("too many false alarms")
+        applied.append(changes)
+
+    try:
+        values = declare_parameters(node, "uav_fault_estimator", "detector_node.yaml",
+                                    detector_node.PARAMETERS, apply_changes)
+        assert not node.describe_parameter("false_alarm_probability").read_only
+        assert node.describe_parameter("window").read_only
+        (ok,) = node.set_parameters([Parameter("false_alarm_probability", value=0.001)])
+        assert ok.successful and applied == [{"false_alarm_probability": 0.001}]
+        assert values["false_alarm_probability"] == 0.001
+        (refused,) = node.set_parameters([Parameter("false_alarm_probability", value=0.2)])
+        assert (refused.successful, refused.reason) == (False, "too many false alarms")
+        (wrong_type,) = node.set_parameters([Parameter("false_alarm_probability", value="x")])
+        assert not wrong_type.successful
+        assert values["false_alarm_probability"] == 0.001 == node.get_parameter(
+            "false_alarm_probability").value
+        assert len(applied) == 1
+    finally:
+        node.destroy_node()

@@ -91,7 +91,7 @@ def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
     result = run_cli("param", "set", "/mhe_node", "horizon", "60")
     assert result.returncode == 0, result.stderr
     answer = (result.stdout + result.stderr).strip()
-    # the nodes read their parameters once: read-only, so a set is refused with the reason
+    # the horizon shapes the QP, built at start: read-only, so a set is refused with the reason
     assert result.stdout == ""
     assert answer == "Setting parameter failed: Trying to set a read-only parameter: horizon."
     got = run_cli("param", "get", "/mhe_node", "horizon")

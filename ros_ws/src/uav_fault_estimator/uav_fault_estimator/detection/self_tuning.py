@@ -151,16 +151,22 @@ class SelfTuningDetector:
 
     def __init__(self, calibration: Calibration, false_alarm_probability: float) -> None:
         self.calibration = calibration
+        self.set_false_alarm_probability(false_alarm_probability)
+        # Samples on the grid that could not be used (the first after a reset; a rate or
+        # surface missing), over the detector's life.
+        self.skipped_samples = 0
+        self.reset()
+
+    def set_false_alarm_probability(self, false_alarm_probability: float) -> None:
+        """The thresholds of every test for this designed false-alarm probability per sample
+        (eq. 25), from the next sample on; the generators' state is kept."""
+        calibration = self.calibration
         self.false_alarm_probability = false_alarm_probability
         self.thresholds = np.array([weibull_threshold(calibration.channels[c].glrt,
                                                       false_alarm_probability)
                                     for c in CHANNELS])
         self.parameter_threshold = weibull_threshold(calibration.parameter,
                                                      false_alarm_probability)
-        # Samples on the grid that could not be used (the first after a reset; a rate or
-        # surface missing), over the detector's life.
-        self.skipped_samples = 0
-        self.reset()
 
     def reset(self) -> None:
         """Back to the calibration's parameters: after a restart of the source."""

@@ -83,6 +83,35 @@ class MovingHorizonEstimator:
         self._z_dual = np.zeros(self.problem.l.size)
         self._window_pct = np.tile(config.prior_pct, (n, 1))
 
+    def retune(self, config: EstimatorConfig) -> None:
+        """Take config's weights from the next update on, keeping the window and its estimate.
+
+        What may change at run time: Q by a factor common to every channel (the window's data
+        terms are reweighted by it: exact, as if they had come in with the new Q), R (the
+        arrival cost restarts at its mean with covariance diag R: a new handover), the
+        arrival cost's inflation and floor, and the solver's tolerances. ValueError naming
+        the first other difference (horizon, faults, their models, bounds or priors, the
+        arrival centre): those shape the QP, built once.
+        """
+        config.validate()
+        current = self.config
+        for name in ("horizon", "faults", "arrival_centre"):
+            if getattr(config, name) != getattr(current, name):
+                raise ValueError(f"{name} shapes the estimator's QP: it changes only at a "
+                                 "restart of the node")
+        ratio = config.q_inv / self._q_inv
+        if not np.allclose(ratio, ratio[0], rtol=1e-12, atol=0.0):
+            raise ValueError("Q changes at run time only by a factor common to every channel")
+        self._gram *= ratio[0]
+        self._linear *= ratio[0]
+        self._q_inv = config.q_inv
+        if config.r_diag_pct2 != current.r_diag_pct2:
+            self.arrival.information = np.diag(config.r_inv)
+        self.arrival.inflation = config.arrival_inflation
+        self.arrival.floor_variance = config.arrival_floor
+        self.solver.apply(config.solver)
+        self.config = config
+
     def update(
         self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None,
         noise_variances: np.ndarray | None = None,

@@ -55,9 +55,7 @@ class ProxQPSolver:
         self.problem = problem
         qp = proxqp.sparse.QP(problem.n_variables, problem.b.size, problem.l.size)
         self.settings = qp.settings
-        self.settings.eps_abs = settings.eps_abs
-        self.settings.eps_rel = settings.eps_rel
-        self.settings.max_iter = settings.max_iter
+        self.apply(settings)
         self.settings.nb_iterative_refinement = ITERATIVE_REFINEMENT_STEPS
         self.settings.initial_guess = proxqp.InitialGuess.WARM_START
         self.settings.compute_timings = True
@@ -65,6 +63,12 @@ class ProxQPSolver:
         self._qp = qp
         self._scaled_h = problem.H.copy()
         self._initialised = False
+
+    def apply(self, settings: SolverSettings) -> None:
+        """Tolerances and iteration cap from the next solve on."""
+        self.settings.eps_abs = settings.eps_abs
+        self.settings.eps_rel = settings.eps_rel
+        self.settings.max_iter = settings.max_iter
 
     def solve(self, x0: np.ndarray, y0: np.ndarray, z0: np.ndarray) -> SolveOutcome:
         """Solve with the problem's current H and g from the guess (x0, y0, z0).

@@ -9,6 +9,7 @@ parameter-deviation test (self_tuning.py; Blanke & Hansen) and publishes `faults
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 from rclpy.node import Node
 from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultAlarm
@@ -41,7 +42,8 @@ PARAMETERS = {
     "forgetting_factor": ParameterSpec("lambda_f of the RLS; must be the calibration's",
                                        0.5, 1.0),
     "false_alarm_probability": ParameterSpec(
-        "designed P_FA per sample of each test (eq. 23-25)", 1e-9, 0.5),
+        "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds",
+        1e-9, 0.5, live=True),
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),
@@ -53,7 +55,8 @@ class DetectorNode(Node):
 
     def __init__(self) -> None:
         super().__init__("detector_node")
-        p = declare_parameters(self, "uav_fault_estimator", "detector_node.yaml", PARAMETERS)
+        p = declare_parameters(self, "uav_fault_estimator", "detector_node.yaml", PARAMETERS,
+                               self.retune)
         calibration = load_calibration(p["calibration_file"], p["window"],
                                        p["forgetting_factor"])
         self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
@@ -62,6 +65,11 @@ class DetectorNode(Node):
                                       "generators reset to the calibration")
         self.diagnostics = Diagnostics(self)
         self.counts = {"published": 0, "combined_alarms": 0}
+
+    def retune(self, changes: dict[str, Any]) -> None:
+        """The thresholds for a changed false-alarm probability, from the next sample on."""
+        self.detector.set_false_alarm_probability(changes["false_alarm_probability"])
+        self.get_logger().info(f"thresholds for P_FA = {changes['false_alarm_probability']:g}")
 
     def process(self, time_s: float, payloads: dict) -> None:
         skipped = self.detector.skipped_samples

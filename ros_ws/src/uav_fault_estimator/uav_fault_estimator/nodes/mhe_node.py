@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sys
 from collections import deque
+from typing import Any
 
 import numpy as np
 from rclpy.node import Node
@@ -19,6 +20,7 @@ from uav_sim.ros.node_tools import (
     STREAM_QOS,
     WARN,
     Diagnostics,
+    ParameterError,
     ParameterSpec,
     declare_parameters,
     run_node,
@@ -36,6 +38,7 @@ from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampVerdict
 # Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
 # it; variances and scales positive where the estimator divides by them; the horizon at
 # most 2000 samples (1000 s at 0.5 s, three times the default flight): the QP grows with it.
+# Live: the weights and tolerances (MovingHorizonEstimator.retune); the rest shapes the QP.
 PARAMETERS = {
     "fault_names": ParameterSpec("the estimated faults: columns of the residuals' S, by name"),
     "fault_models": ParameterSpec("per fault: monotonic, monotonic_decreasing, random_walk, "
@@ -53,13 +56,14 @@ PARAMETERS = {
         "config/residual_noise.yaml"),
     "noise_variance_factor": ParameterSpec(
         "Q = this factor times the calibrated variances (correlated noise: fewer independent "
-        "samples than the window holds)", 1e-3, 1e6),
+        "samples than the window holds); a change reweights the window", 1e-3, 1e6, live=True),
     "handover_variances_pct2": ParameterSpec(
-        "R of eq. 17: per fault, the arrival cost's variance before any data [%^2]", 1e-6, 1e6),
+        "R of eq. 17: per fault, the arrival cost's variance before any data [%^2]; a change "
+        "restarts the arrival cost at its mean with this variance", 1e-6, 1e6, live=True),
     "arrival_inflation": ParameterSpec(
-        "factor (>= 1) on the arrival cost's covariance every sample", 1.0, 10.0),
+        "factor (>= 1) on the arrival cost's covariance every sample", 1.0, 10.0, live=True),
     "arrival_floor_variances_pct2": ParameterSpec(
-        "per fault: the least variance of the arrival cost [%^2]", 0.0, 1e6),
+        "per fault: the least variance of the arrival cost [%^2]", 0.0, 1e6, live=True),
     "arrival_centre": ParameterSpec(
         "where the arrival cost is centred: filter (the arrival filter's mean) or "
         "previous_window (the previous window's estimate, as the paper)"),
@@ -69,10 +73,11 @@ PARAMETERS = {
     "wind_error_sigma_mps": ParameterSpec(
         "random-walk step of each wind error per residual sample [m/s]", 1e-4, 10.0),
     "wind_error_handover_variance_m2ps2": ParameterSpec(
-        "R of eq. 17 for each wind error [m^2/s^2]", 1e-6, 1e4),
+        "R of eq. 17 for each wind error [m^2/s^2]", 1e-6, 1e4, live=True),
     "solver_eps_abs": ParameterSpec("ProxSuite's absolute tolerance (on the scaled problem)",
-                                    1e-12, 0.1),
-    "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000),
+                                    1e-12, 0.1, live=True),
+    "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000,
+                                     live=True),
 }
 RECENT_SOLVES = 200  # solve times kept for the median and p99 on /diagnostics
 
@@ -83,7 +88,7 @@ class MheNode(Node):
     def __init__(self) -> None:
         super().__init__("mhe_node")
         self.parameters = declare_parameters(
-            self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS
+            self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS, self.retune
         )
         self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
         self.noise = noise_calibration(self.parameters)
@@ -98,6 +103,17 @@ class MheNode(Node):
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
                        "stamp_resets": 0, "stray_stamps": 0}
         self.stamps = StampGuard()
+
+    def retune(self, changes: dict[str, Any]) -> None:
+        """Apply changed live parameters from the next residual on (ParameterError: none)."""
+        try:
+            config = config_from_parameters({**self.parameters, **changes}, Residuals.CHANNELS)
+            self.estimator.retune(config)
+        except ValueError as error:
+            raise ParameterError(str(error)) from None
+        self.config = config
+        self.get_logger().info("retuned: " + ", ".join(
+            f"{name} = {value}" for name, value in changes.items()))
 
     def on_residuals(self, message: Residuals) -> None:
         stamp_ns = stamp_nanoseconds(message.header.stamp)

@@ -16,7 +16,12 @@ from typing import Any, TypeVar
 import rclpy
 import rclpy.logging
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    SetParametersResult,
+)
 from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
@@ -49,13 +54,15 @@ AIRCRAFT = "aerosonde"  # the hardware every node diagnoses; its namespace names
 
 @dataclass(frozen=True)
 class ParameterSpec:
-    """What a node says about one of its parameters: its description and, for numbers, the
-    closed range [low, high] its values (each element of an array) must lie in. The default
-    lives in the package's config YAML alone, and its type is the default's type."""
+    """What a node says about one of its parameters: its description; for numbers, the
+    closed range [low, high] its values (each element of an array) must lie in; and whether
+    the node applies a change at run time (live) or reads it once, at start (read-only). The
+    default lives in the package's config YAML alone, and its type is the default's type."""
 
     description: str
     low: float | None = None
     high: float | None = None
+    live: bool = False
 
     def range_text(self) -> str:
         return "" if self.low is None or self.high is None else f"[{self.low:g}, {self.high:g}]"
@@ -110,10 +117,10 @@ def checked_value(name: str, value: Any, kind: Parameter.Type, spec: ParameterSp
 
 
 def _descriptor(kind: Parameter.Type, spec: ParameterSpec) -> ParameterDescriptor:
-    # Read-only: every node reads its parameters once, at start, so a change at run time
-    # could not be honoured; `ros2 param set` is refused with that reason, never ignored.
+    # Read-only unless live: a value read once, at start, cannot follow a change at run
+    # time, so `ros2 param set` is refused with that reason, never ignored.
     descriptor = ParameterDescriptor(description=spec.description, type=kind.value,
-                                     read_only=True)
+                                     read_only=not spec.live)
     if spec.range_text():
         if kind == Parameter.Type.DOUBLE:
             descriptor.floating_point_range = [
@@ -126,8 +133,14 @@ def _descriptor(kind: Parameter.Type, spec: ParameterSpec) -> ParameterDescripto
     return descriptor
 
 
+# What a node does with changes of its live parameters (new values by name): apply them
+# all, or none and raise ParameterError with the reason `ros2 param set` prints.
+ApplyChanges = Callable[[dict[str, Any]], None]
+
+
 def declare_parameters(
-    node: Node, package: str, config_file: str, specs: Mapping[str, ParameterSpec | str]
+    node: Node, package: str, config_file: str, specs: Mapping[str, ParameterSpec | str],
+    apply_changes: ApplyChanges | None = None,
 ) -> dict[str, Any]:
     """Declare each parameter with its default from the package's config YAML, its type and
     range in its descriptor; the values by name.
@@ -135,6 +148,8 @@ def declare_parameters(
     Values given on the command line or in a --params-file override the defaults, after a
     check: of the type (an integer is taken for a real), of the range, and that the node has
     such a parameter. A bad one raises ParameterError (one line) before anything is declared.
+    Live parameters (ParameterSpec.live) changed at run time go, checked the same way, to
+    apply_changes; once it has applied them the returned dict holds the new values.
     """
     specs = {name: spec if isinstance(spec, ParameterSpec) else ParameterSpec(spec)
              for name, spec in specs.items()}
@@ -159,7 +174,31 @@ def declare_parameters(
     for name, spec in specs.items():
         kind = Parameter.Type.from_parameter_value(defaults[name])
         node.declare_parameter(name, values[name], _descriptor(kind, spec), ignore_override=True)
-    return {name: node.get_parameter(name).value for name in specs}
+    values = {name: node.get_parameter(name).value for name in specs}
+    live = {name: spec for name, spec in specs.items() if spec.live}
+    if live:
+        if apply_changes is None:
+            raise TypeError(f"live parameters {sorted(live)} need apply_changes")
+        node.add_on_set_parameters_callback(
+            lambda parameters: _set_live(parameters, live, values, apply_changes))
+    return values
+
+
+def _set_live(parameters: list[Parameter], live: Mapping[str, ParameterSpec],
+              values: dict[str, Any], apply_changes: ApplyChanges) -> SetParametersResult:
+    """The on-set callback: rclpy has refused read-only ones and values outside a
+    descriptor's range already; the same checks as at start, then the node applies them."""
+    try:
+        changes = {parameter.name: checked_value(
+            parameter.name, parameter.value, Parameter.Type.from_parameter_value(
+                values[parameter.name]), live[parameter.name])
+            for parameter in parameters if parameter.name in live}
+        if changes:
+            apply_changes(changes)
+    except ParameterError as error:
+        return SetParametersResult(successful=False, reason=str(error))
+    values.update(changes)
+    return SetParametersResult(successful=True)
 
 
 class Diagnostics:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+from typing import Any
 
 import rclpy
 from geometry_msgs.msg import Vector3Stamped
@@ -50,7 +51,8 @@ PARAMETERS = {
     "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock [Hz]",
                                     1.0, 480.0),
     "real_time_factor": ParameterSpec(
-        "simulated seconds per wall second; 0: as fast as subscribers keep up", 0.0, 1000.0),
+        "simulated seconds per wall second; 0: as fast as subscribers keep up", 0.0, 1000.0,
+        live=True),
     "wait_for_subscribers": ParameterSpec(
         "start once state has this many subscriptions and discovery settled", 0, 100),
 }
@@ -67,7 +69,10 @@ class SimNode(Node):
 
     def __init__(self) -> None:
         super().__init__("sim_node")
-        self.parameters = declare_parameters(self, "uav_sim", "sim_node.yaml", PARAMETERS)
+        self.parameters = declare_parameters(self, "uav_sim", "sim_node.yaml", PARAMETERS,
+                                             self.change_pace)
+        # (wall time [s, monotonic], sim time [s]) that the pacing counts from
+        self.pace_origin: tuple[float, float] | None = None
         scenario_path = self.parameters["scenario"] or str(default_scenario_path())
         self.scenario = load_scenario(scenario_path)
         self.simulation = Simulation(
@@ -147,14 +152,18 @@ class SimNode(Node):
 
     def fly(self) -> None:
         """Step and publish until the scenario's end, paced by the real-time factor."""
-        rate = self.parameters["real_time_factor"]
         started = time.monotonic()
+        self.pace_origin = (started, self.simulation.time_s)
         self.publish(self.simulation.sample())
         while rclpy.ok() and not self.simulation.finished:
             sample = self.simulation.step()
             self.publish(sample)
+            rate = self.parameters["real_time_factor"]
+            if self.pace_origin is None:  # the factor changed: count from here
+                self.pace_origin = (time.monotonic(), sample.time_s)
             if rate > 0:
-                time.sleep(max(0.0, started + sample.time_s / rate - time.monotonic()))
+                wall_s, sim_s = self.pace_origin
+                time.sleep(max(0.0, wall_s + (sample.time_s - sim_s) / rate - time.monotonic()))
             elif self.simulation.sample_count % ACK_EVERY_SAMPLES == 0:
                 self.wait_until_delivered()
             self.report(sample, time.monotonic() - started)
@@ -164,6 +173,11 @@ class SimNode(Node):
             f"scenario '{self.scenario.name}' finished at {self.simulation.time_s:g} s of "
             f"simulation time after {time.monotonic() - started:.1f} s of wall time"
         )
+
+    def change_pace(self, changes: dict[str, Any]) -> None:
+        """A new real-time factor, counted from the next step on."""
+        self.pace_origin = None
+        self.get_logger().info(f"real-time factor {changes['real_time_factor']:g}")
 
     def report(self, sample: Sample, wall_s: float) -> None:
         channels = list(zip(STATE_CHANNELS, sample.state, strict=True))
