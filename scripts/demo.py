@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The main job: fly a scenario through the nodes, record every topic, report.
 
-    scripts/demo.sh [SCENARIO.yaml] [--out DIR]
+    scripts/demo.sh [SCENARIO.yaml ...] [--out DIR]
 
 Starts recorder_node, mhe_node, residual_node, detector_node and sim_node as processes
 (the executables `ros2 run` starts) on a ROS domain of the run's own, flies the scenario
@@ -11,6 +11,12 @@ from the recording (scripts/report.py) and prints the metrics as a table. DIR (d
 runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures and logs/
 (each node's output, <node>.log). The scenario's `estimator:` mapping overrides mhe_node's
 parameters.
+
+Several scenarios fly several aircraft in the one domain: vehicle k flies the k-th under
+the namespace /uavk with nodes of its own, the first simulator publishes /clock and the
+others follow it (one clock for the domain, so the scenarios must last as long); one
+recorder records them all, and each vehicle is reported from it (report.py --ns /uavk) into
+DIR/uavk/ (default DIR: runs/<name 1>+<name 2>...), its logs in logs/uavk/.
 
 The demo writes only into an output folder of its own: one it creates (or finds empty) and
 marks with the file .uav-demo-run. A run into a marked folder replaces the bag/ and logs/ of
@@ -32,7 +38,7 @@ import signal
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -80,10 +86,29 @@ class StalledError(Exception):
     """Nothing happened for too long (the message says while doing what)."""
 
 
-class Progress:
-    """A hidden rclpy node of the demo: simulated time (/clock) and the estimates' count."""
+@dataclass(frozen=True)
+class Vehicle:
+    """One aircraft of the run: its namespace ("" when it flies alone), scenario and
+    mhe_node parameter file (None: the defaults)."""
 
-    def __init__(self) -> None:
+    namespace: str
+    scenario: Scenario
+    mhe_params: Path | None
+
+    def topic(self, name: str) -> str:
+        """The absolute name of one of its nodes' topics."""
+        return f"{self.namespace}/{name}"
+
+    def node_name(self, executable: str) -> str:
+        """How the demo names one of its nodes: `uav1/mhe_node`, or `mhe_node` alone."""
+        return f"{self.namespace.strip('/')}/{executable}".lstrip("/")
+
+
+class Progress:
+    """A hidden rclpy node of the demo: simulated time (/clock) and each vehicle's count of
+    estimates."""
+
+    def __init__(self, vehicles: list[Vehicle]) -> None:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -101,18 +126,25 @@ class Progress:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.time_s = 0.0
-        self.estimates = 0
+        self.estimates = {vehicle.namespace: 0 for vehicle in vehicles}
         self.node.create_subscription(
             Clock, "/clock", self._on_clock,
             QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
-        self.node.create_subscription(FaultEstimate, "faults/estimate", self._on_estimate,
-                                      STREAM_QOS)
+        for vehicle in vehicles:
+            self.node.create_subscription(
+                FaultEstimate, vehicle.topic("faults/estimate"),
+                lambda _message, key=vehicle.namespace: self._on_estimate(key), STREAM_QOS)
 
     def _on_clock(self, message: Any) -> None:
         self.time_s = max(self.time_s, stamp_seconds(message.clock))
 
-    def _on_estimate(self, _message: Any) -> None:
-        self.estimates += 1
+    def _on_estimate(self, namespace: str) -> None:
+        self.estimates[namespace] += 1
+
+    @property
+    def received(self) -> int:
+        """Estimates received, all vehicles together."""
+        return sum(self.estimates.values())
 
     def subscriptions(self, topic: str) -> int:
         return self.node.count_subscribers(topic)
@@ -125,9 +157,9 @@ class Progress:
                 break
 
     def _spin_ready(self) -> bool:
-        before = (self.time_s, self.estimates)
+        before = (self.time_s, self.received)
         self.executor.spin_once(timeout_sec=0.0)
-        return (self.time_s, self.estimates) != before
+        return (self.time_s, self.received) != before
 
     def close(self) -> None:
         self.executor.shutdown()
@@ -138,24 +170,29 @@ class Progress:
 class Demo:
     """One run: the node processes, their watch, and their stop."""
 
-    def __init__(self, scenario: Scenario, out: Path, mhe_params: Path | None) -> None:
-        self.scenario = scenario
+    def __init__(self, vehicles: list[Vehicle], out: Path) -> None:
+        self.vehicles = vehicles
+        self.duration_s = vehicles[0].scenario.duration_s  # of every vehicle: one clock
         self.bag = out / "bag"
         self.logs = out / "logs"
-        self.mhe_params = mhe_params
-        self.nodes: dict[str, RosProcess] = {}  # by executable, in start order
+        self.nodes: dict[str, RosProcess] = {}  # by Vehicle.node_name, in start order
         self.progress: Progress | None = None
         self.next_report_s = PROGRESS_EVERY_S
-        # one estimate per residual: residual_node runs with its defaults here
-        self.expected = round(scenario.duration_s / residual_update_period_s())
+        # per vehicle, one estimate per residual: residual_node runs with its defaults here
+        self.expected = round(self.duration_s / residual_update_period_s())
 
-    def start(self, package: str, executable: str, ros_args: list[str]) -> RosProcess:
-        """Start a node; every one but sim_node on sim_node's /clock."""
-        if executable != "sim_node":
+    def start(self, vehicle: Vehicle | None, package: str, executable: str,
+              ros_args: list[str]) -> RosProcess:
+        """Start a node, of a vehicle (in its namespace) or of the run (None); every one on
+        /clock (use_sim_time) but the first vehicle's sim_node, which publishes it."""
+        name = vehicle.node_name(executable) if vehicle else executable
+        if vehicle is not None and vehicle.namespace:
+            ros_args = [*ros_args, "-r", f"__ns:={vehicle.namespace}"]
+        if not (executable == "sim_node" and vehicle is self.vehicles[0]):
             ros_args = [*ros_args, *SIM_TIME_ROS_ARGS]
         process = RosProcess(ros2_run_argv(package, executable, ros_args),
-                             self.logs / f"{executable}.log")
-        self.nodes[executable] = process
+                             self.logs / f"{name}.log")
+        self.nodes[name] = process
         return process
 
     def watch(self, until: Callable[[], bool], timeout_s: float,
@@ -166,7 +203,7 @@ class Demo:
         with status 0."""
         progress = self.progress
         assert progress is not None
-        last_seen, last_change = (progress.time_s, progress.estimates), time.monotonic()
+        last_seen, last_change = (progress.time_s, progress.received), time.monotonic()
         while not until():
             progress.spin(0.05)
             self.report_progress()
@@ -174,8 +211,8 @@ class Demo:
                 status = process.process.poll()
                 if status is not None and not (name in finished and status == 0):
                     raise NodeEndedError(name, status)
-            if (progress.time_s, progress.estimates) != last_seen:
-                last_seen, last_change = (progress.time_s, progress.estimates), time.monotonic()
+            if (progress.time_s, progress.received) != last_seen:
+                last_seen, last_change = (progress.time_s, progress.received), time.monotonic()
             elif time.monotonic() - last_change > timeout_s:
                 return False
         return True
@@ -183,51 +220,61 @@ class Demo:
     def report_progress(self, final: bool = False) -> None:
         progress = self.progress
         assert progress is not None
-        if final or self.next_report_s <= progress.time_s < self.scenario.duration_s:
-            print(f"  t = {progress.time_s:.0f} / {self.scenario.duration_s:g} s, "
-                  f"{progress.estimates} estimates", flush=True)
+        if final or self.next_report_s <= progress.time_s < self.duration_s:
+            each = "" if len(self.vehicles) == 1 else " (" + ", ".join(
+                f"{vehicle.namespace}: {progress.estimates[vehicle.namespace]}"
+                for vehicle in self.vehicles) + ")"
+            print(f"  t = {progress.time_s:.0f} / {self.duration_s:g} s, "
+                  f"{progress.received} estimates{each}", flush=True)
             while self.next_report_s <= progress.time_s:
                 self.next_report_s += PROGRESS_EVERY_S
 
-    def fly(self) -> int:
-        """Start the nodes, fly, wait for the estimates: how many estimates the demo's node
-        received. The nodes still run afterwards, whatever happened: stop() them.
-        NodeEndedError when a node ends on its own, StalledError when nothing happens for
-        too long."""
-        self.progress = progress = Progress()
-        self.start("uav_fault_estimator", "recorder_node", ["-p", f"output_dir:={self.bag}"])
+    def fly(self) -> dict[str, int]:
+        """Start the nodes, fly, wait for the estimates: how many estimates of each vehicle
+        (by namespace) the demo's node received. The nodes still run afterwards, whatever
+        happened: stop() them. NodeEndedError when a node ends on its own, StalledError when
+        nothing happens for too long."""
+        self.progress = progress = Progress(self.vehicles)
+        self.start(None, "uav_fault_estimator", "recorder_node", ["-p", f"output_dir:={self.bag}"])
         if not self.watch(self.bag.exists, STARTUP_TIMEOUT_S):
             raise StalledError(
                 f"recorder_node did not create {self.bag} in {STARTUP_TIMEOUT_S:g} s")
-        self.start("uav_fault_estimator", "mhe_node",
-                   ["--params-file", str(self.mhe_params)] if self.mhe_params else [])
-        self.start("uav_fault_estimator", "residual_node", [])
-        self.start("uav_fault_estimator", "detector_node", [])
+        for vehicle in self.vehicles:
+            self.start(vehicle, "uav_fault_estimator", "mhe_node",
+                       ["--params-file", str(vehicle.mhe_params)] if vehicle.mhe_params else [])
+            self.start(vehicle, "uav_fault_estimator", "residual_node", [])
+            self.start(vehicle, "uav_fault_estimator", "detector_node", [])
         # mhe_node and the recorder on residuals, the recorder and the demo on the estimates,
         # the recorder on the alarms: then nothing the nodes publish can be missed
-        if not self.watch(lambda: progress.subscriptions("/residuals") >= 2
-                          and progress.subscriptions("/faults/estimate") >= 2
-                          and progress.subscriptions("/faults/alarm") >= 1,
-                          STARTUP_TIMEOUT_S):
+        if not self.watch(lambda: all(
+                progress.subscriptions(vehicle.topic("residuals")) >= 2
+                and progress.subscriptions(vehicle.topic("faults/estimate")) >= 2
+                and progress.subscriptions(vehicle.topic("faults/alarm")) >= 1
+                for vehicle in self.vehicles), STARTUP_TIMEOUT_S):
             raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
         started = time.monotonic()
-        sim = self.start("uav_sim", "sim_node",
-                         fast_flight_ros_args(self.scenario.path, STATE_SUBSCRIBERS))
-        print(f"flying {self.scenario.duration_s:g} s of simulated time as fast as the nodes "
-              "keep up", flush=True)
-        if not self.watch(lambda: not sim.running(), STALL_TIMEOUT_S, finished=("sim_node",)):
+        # the followers first: the first vehicle's simulator starts the clock
+        sims = [self.start(vehicle, "uav_sim", "sim_node",
+                           fast_flight_ros_args(vehicle.scenario.path, STATE_SUBSCRIBERS))
+                for vehicle in reversed(self.vehicles)]
+        simulators = tuple(vehicle.node_name("sim_node") for vehicle in self.vehicles)
+        print(f"flying {self.duration_s:g} s of simulated time as fast as the nodes keep up",
+              flush=True)
+        if not self.watch(lambda: not any(sim.running() for sim in sims), STALL_TIMEOUT_S,
+                          finished=simulators):
             raise StalledError(f"simulated time stood still for {STALL_TIMEOUT_S:g} s")
-        # the last estimates may still be on their way when the simulator ends
-        if not self.watch(lambda: progress.estimates >= self.expected, ESTIMATES_TIMEOUT_S,
-                          finished=("sim_node",)):
-            print(f"demo: {progress.estimates} of {self.expected} estimates arrived within "
-                  f"{ESTIMATES_TIMEOUT_S:g} s of the flight's end", file=sys.stderr)
+        # the last estimates may still be on their way when the simulators end
+        if not self.watch(lambda: min(progress.estimates.values()) >= self.expected,
+                          ESTIMATES_TIMEOUT_S, finished=simulators):
+            print(f"demo: {progress.received} of {self.expected * len(self.vehicles)} "
+                  f"estimates arrived within {ESTIMATES_TIMEOUT_S:g} s of the flight's end",
+                  file=sys.stderr)
         grace_end = time.monotonic() + RECORDER_GRACE_S  # for the recorder to take them too
         self.watch(lambda: time.monotonic() > grace_end, RECORDER_GRACE_S + 1.0,
-                   finished=("sim_node",))
+                   finished=simulators)
         self.report_progress(final=True)
         print(f"flown in {time.monotonic() - started:.1f} s of wall time", flush=True)
-        return progress.estimates
+        return dict(progress.estimates)
 
     def stop(self) -> list[str]:
         """Stop the demo's node and every node process still running (SIGINT to each group
@@ -241,7 +288,7 @@ class Demo:
                 for name, status in zip(running, statuses, strict=True) if status != 0]
 
 
-def prepare_output(out: Path, scenario_path: Path) -> None:
+def prepare_output(out: Path, *scenario_paths: Path) -> None:
     """Make out the run's output folder: create it and mark it (OUTPUT_MARK), or take a
     marked one and remove the earlier run's bag/ and logs/. OutputFolderError, with nothing
     removed, for a file, a folder that is not empty and not marked, a bag/ or logs/ that is
@@ -263,9 +310,10 @@ def prepare_output(out: Path, scenario_path: Path) -> None:
                 raise OutputFolderError(
                     f"{folder} is not a folder demo.sh made (a file or a link); move it away "
                     f"or {what_to_do}")
-            if scenario_path.is_relative_to(folder.resolve()):
+            inside = [path for path in scenario_paths if path.is_relative_to(folder.resolve())]
+            if inside:
                 raise OutputFolderError(
-                    f"the scenario {scenario_path} is inside {folder}, which the run replaces; "
+                    f"the scenario {inside[0]} is inside {folder}, which the run replaces; "
                     "move the scenario elsewhere")
         out.mkdir(parents=True, exist_ok=True)
         mark.write_text("An output folder of scripts/demo.sh: a run into it replaces bag/ "
@@ -277,6 +325,15 @@ def prepare_output(out: Path, scenario_path: Path) -> None:
         reason = error.strerror or type(error).__name__
         raise OutputFolderError(
             f"cannot write into the output folder {out} ({reason}); {what_to_do}") from None
+
+
+def check_one_clock(scenarios: list[Scenario]) -> None:
+    """ScenarioError unless the scenarios last as long: the vehicles fly on one clock."""
+    durations = sorted({scenario.duration_s for scenario in scenarios})
+    if len(durations) > 1:
+        raise ScenarioError(
+            "the scenarios last " + " and ".join(f"{d:g} s" for d in durations) + ": the "
+            "vehicles fly on one clock, so their scenarios must last as long")
 
 
 def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
@@ -318,10 +375,11 @@ def main() -> int:
         prog="demo.sh", description=__doc__.splitlines()[0],
         epilog="Exit status: 0 done, 1 a node or the report failed, 2 bad arguments or "
         "scenario, 130 interrupted.")
-    parser.add_argument("scenario", nargs="?", type=Path,
-                        help="scenario YAML (default: the shipped default scenario)")
+    parser.add_argument("scenarios", nargs="*", type=Path, metavar="scenario",
+                        help="scenario YAML (default: the shipped default scenario); several: "
+                        "one aircraft each, under /uav1, /uav2, ...")
     parser.add_argument("--out", type=Path,
-                        help="output directory (default: runs/<scenario name>/)")
+                        help="output directory (default: runs/<scenario name>[+<name>...]/)")
     arguments = parser.parse_args()
     wall_started = time.monotonic()
     # Ctrl-C and SIGTERM: KeyboardInterrupt, whatever the caller left (an ignored SIGINT
@@ -330,17 +388,24 @@ def main() -> int:
         signal.signal(sig, signal.default_int_handler)
 
     try:
-        scenario = load_scenario(arguments.scenario or default_scenario_path())
-        out = arguments.out or REPO_ROOT / "runs" / scenario.name
-        overrides = mhe_overrides(scenario)
+        scenarios = [replace(scenario, path=scenario.path.resolve()) for scenario in
+                     map(load_scenario, arguments.scenarios or [default_scenario_path()])]
+        overrides = [mhe_overrides(scenario) for scenario in scenarios]
+        check_one_clock(scenarios)
     except ScenarioError as error:
         print(f"demo: {' '.join(str(error).split())}", file=sys.stderr)  # one line
         return 2
-    scenario = replace(scenario, path=scenario.path.resolve())
-    out = out.resolve()
+    out = (arguments.out or REPO_ROOT / "runs" / "+".join(
+        scenario.name for scenario in scenarios)).resolve()
+    namespaces = [""] if len(scenarios) == 1 else [f"/uav{k + 1}" for k in range(len(scenarios))]
     try:
-        prepare_output(out, scenario.path)
-        mhe_params = write_parameter_file(out / "logs" / "mhe_node.params.yaml", overrides)
+        prepare_output(out, *(scenario.path for scenario in scenarios))
+        vehicles = []
+        for namespace, scenario, override in zip(namespaces, scenarios, overrides, strict=True):
+            logs = out / "logs" / namespace.strip("/")
+            logs.mkdir(exist_ok=True)
+            vehicles.append(Vehicle(namespace, scenario, write_parameter_file(
+                logs / "mhe_node.params.yaml", override)))
     except OutputFolderError as error:
         print(f"demo: {error}", file=sys.stderr)  # one line
         return 2
@@ -352,9 +417,11 @@ def main() -> int:
     domain_id, lock = reserve_domain_id()
     os.environ.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
                       ROS_LOG_DIR=str(out / "logs"))
-    print(f"demo: scenario '{scenario.name}' ({scenario.path}), ROS domain {domain_id}, "
-          f"output in {out}", flush=True)
-    demo = Demo(scenario, out, mhe_params)
+    for vehicle in vehicles:
+        print(f"demo: {vehicle.namespace + ' flies ' if vehicle.namespace else ''}scenario "
+              f"'{vehicle.scenario.name}' ({vehicle.scenario.path})", flush=True)
+    print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
+    demo = Demo(vehicles, out)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
         received = demo.fly()
@@ -380,22 +447,32 @@ def main() -> int:
             _recorded(demo)
         return status
 
-    try:
-        metrics, figures = write_report(demo.bag, out, scenario.name)
-    except (ValueError, OSError) as error:  # a RecordingError is a ValueError
-        print(f"demo: no report: {error}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print("\ndemo: interrupted while writing the report", file=sys.stderr)
-        return 130
-    print()
-    print(table(metrics))
-    print(f"written to {out}: bag/, logs/, metrics.json, "
-          + ", ".join(path.name for path in figures))
+    missing = False
+    for vehicle in vehicles:
+        report_out = out / vehicle.namespace.strip("/")
+        try:
+            metrics, figures = write_report(demo.bag, report_out, vehicle.scenario.name,
+                                            vehicle.namespace)
+        except (ValueError, OSError) as error:  # a RecordingError is a ValueError
+            print(f"demo: no report: {error}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            print("\ndemo: interrupted while writing the report", file=sys.stderr)
+            return 130
+        print()
+        if vehicle.namespace:
+            print(f"{vehicle.namespace}:")
+        print(table(metrics))
+        print(f"written to {report_out}: " + ("" if vehicle.namespace else "bag/, logs/, ")
+              + "metrics.json, " + ", ".join(path.name for path in figures))
+        if received[vehicle.namespace] < demo.expected:
+            missing = True
+            print(f"demo: only {received[vehicle.namespace]} of {demo.expected} estimates "
+                  f"of {vehicle.node_name('mhe_node')} arrived", file=sys.stderr)
+    if len(vehicles) > 1:
+        print(f"written to {out}: bag/ (every vehicle), logs/")
     print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time")
-    if received < demo.expected:
-        print(f"demo: only {received} of {demo.expected} estimates arrived", file=sys.stderr)
-    return 1 if failed or received < demo.expected else 0
+    return 1 if failed or missing else 0
 
 
 def _stop(demo: Demo) -> list[str]:

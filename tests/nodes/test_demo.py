@@ -128,6 +128,43 @@ def test_a_node_dying_mid_run_ends_the_demo_with_its_name(
 
 
 @pytest.mark.timeout(150)
+def test_two_aircraft_in_one_domain_each_estimate_as_their_own_offline_chain(
+        start_process, short_scenario, run_dir) -> None:
+    """Two scenarios: /uav1 and /uav2 fly on the first simulator's /clock, one recorder
+    takes both, and each vehicle's estimates, read under its namespace, are its own core
+    chain's to the last digit."""
+    duration_s = 60.0
+    scenarios = [short_scenario(duration_s, faults=[fault]) for fault in TWO_FAULTS]
+    demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
+    assert demo.wait(120) == 0, demo.output()
+    output = demo.output()
+    print(output)
+    assert re.search(r"^  t = 60 / 60 s, 240 estimates \(/uav1: 120, /uav2: 120\)$", output,
+                     re.MULTILINE), output
+    assert "following /clock" in (run_dir / "logs/uav2/sim_node.log").read_text()
+    assert "following /clock" not in (run_dir / "logs/uav1/sim_node.log").read_text()
+    typestore = project_typestore()
+    for namespace, scenario, fault in zip(("/uav1", "/uav2"), scenarios, TWO_FAULTS,
+                                          strict=True):
+        metrics = json.loads((run_dir / namespace[1:] / "metrics.json").read_text())
+        assert metrics["pipeline"]["messages_received"] == 120
+        assert [name for name, entry in metrics["faults"].items() if entry["seeded"]] == [
+            fault["name"]]
+        flown = report.run_from(read_topics(run_dir / "bag", typestore, report.TOPICS,
+                                            namespace), run_dir / "bag").estimates
+        offline, _ = fly_and_estimate(load_scenario(scenario))
+        np.testing.assert_array_equal(flown.stamps_s, offline.stamps_s)
+        np.testing.assert_allclose(flown.values_pct, offline.values_pct, rtol=0, atol=1e-9)
+    other = short_scenario(30.0)
+    refused = subprocess.run([str(DEMO), str(scenarios[0]), str(other), "--out",
+                              str(run_dir.parent / "other")], capture_output=True, text=True,
+                             timeout=60)
+    assert refused.returncode == 2 and refused.stderr == (
+        "demo: the scenarios last 30 s and 60 s: the vehicles fly on one clock, so their "
+        "scenarios must last as long\n")
+
+
+@pytest.mark.timeout(150)
 def test_a_two_fault_flight_gives_its_metrics(start_process, short_scenario, run_dir) -> None:
     """The default flight (turbulence from the wind, noisy sensors) cut to 120 s with two
     faults: the graph's

@@ -4,9 +4,12 @@ Publishes (relative names, STREAM_QOS): `state` (AircraftState), `controls`
 (ControlInputs), `air_data` (AirData; only when the scenario's aircraft carries air data),
 `wind/filtered` (WindEstimate); the simulation's truth `faults/seeded` (FaultVector) and
 `wind/true` (geometry_msgs/Vector3Stamped, NED m/s); and `/clock` (the simulation time, for
-nodes with use_sim_time) and `/diagnostics`. Measurements go through the sensor
-model (uav_sim.sensors) unless the scenario says `sensors: {noise: false}`. Ends by itself at
-the scenario's end, with exit status 0; a bad scenario ends it before it starts, status 1.
+nodes with use_sim_time) and `/diagnostics`. Run with use_sim_time, it follows the domain's
+`/clock` instead of publishing it (a second vehicle in the same domain): each step waits
+until the clock has reached its time, so every vehicle flies on the one clock. Measurements
+go through the sensor model (uav_sim.sensors) unless the scenario says `sensors: {noise:
+false}`. Ends by itself at the scenario's end, with exit status 0; a bad scenario ends it
+before it starts, status 1.
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
+from uav_sim.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 
@@ -59,6 +63,7 @@ PARAMETERS = {
 ACK_TIMEOUT_S = 10.0
 ACK_POLL_S = 0.1  # wall time per wait for acknowledgements, between checks for SIGINT
 DISCOVERY_SETTLE_S = 0.5  # wall time with unchanged subscription counts before flying
+CLOCK_POLL_S = 0.05  # wall time per wait for /clock when following it
 # Fast mode waits for acknowledgement every this many samples; in between, the reliable
 # keep-all writers hold what is not yet acknowledged, so nothing is lost.
 ACK_EVERY_SAMPLES = 10
@@ -90,12 +95,16 @@ class SimNode(Node):
         if self.scenario.sensors.air_data:
             self.air_data_publisher = self.create_publisher(AirData, "air_data", STREAM_QOS)
             self.stream_publishers.append(self.air_data_publisher)
-        self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
+        # one /clock per domain: a simulator on use_sim_time follows it (wait_for_clock)
+        self.follows_clock = self.get_parameter("use_sim_time").value
+        self.clock_publisher = (None if self.follows_clock else
+                                self.create_publisher(Clock, "/clock", CLOCK_QOS))
         self.diagnostics = Diagnostics(self, stale_after_s=None)  # a source: no inputs
         self.get_logger().info(
             f"scenario '{self.scenario.name}' from {scenario_path}: {self.scenario.duration_s:g} s "
-            f"at {self.parameters['sensor_rate_hz']:g} Hz, real-time factor "
-            f"{self.parameters['real_time_factor']:g}"
+            f"at {self.parameters['sensor_rate_hz']:g} Hz, "
+            + ("following /clock" if self.follows_clock else
+               f"real-time factor {self.parameters['real_time_factor']:g}")
         )
 
     def publish(self, sample: Sample) -> None:
@@ -114,7 +123,15 @@ class SimNode(Node):
             messages.append(air_data_message(time_s, sample.air_data))
         for publisher, message in zip(self.stream_publishers, messages, strict=True):
             publisher.publish(message)
-        self.clock_publisher.publish(Clock(clock=stamp(time_s)))
+        if self.clock_publisher is not None:
+            self.clock_publisher.publish(Clock(clock=stamp(time_s)))
+
+    def wait_for_clock(self, time_s: float) -> None:
+        """Block until the domain's /clock has reached time_s [s] (within the grid's
+        tolerance), handling callbacks meanwhile."""
+        while rclpy.ok() and (self.get_clock().now().nanoseconds / NANOSECONDS_PER_SECOND
+                              < time_s - GRID_TOLERANCE_S):
+            rclpy.spin_once(self, timeout_sec=CLOCK_POLL_S)
 
     def wait_until_delivered(self) -> None:
         """Block until every subscriber has acknowledged what was published (no loss), in
@@ -156,9 +173,11 @@ class SimNode(Node):
         self.pace_origin = (started, self.simulation.time_s)
         self.publish(self.simulation.sample())
         while rclpy.ok() and not self.simulation.finished:
+            if self.follows_clock:
+                self.wait_for_clock(self.simulation.time_s + self.simulation.period_s)
             sample = self.simulation.step()
             self.publish(sample)
-            rate = self.parameters["real_time_factor"]
+            rate = 0.0 if self.follows_clock else self.parameters["real_time_factor"]
             if self.pace_origin is None:  # the factor changed: count from here
                 self.pace_origin = (time.monotonic(), sample.time_s)
             if rate > 0:
