@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Starts the nodes live (real time) for interactive use: sim_node, residual_node, mhe_node
-# and detector_node, each with `ros2 run` in a process group of its own, their output in
-# one folder.
+# and detector_node (and foxglove_node with --foxglove), each with `ros2 run` in a process
+# group of its own, their output in one folder.
 # Ctrl-C (or SIGTERM) stops them all: SIGINT to each group, SIGKILL to what remains after
 # a few seconds. A node ending on its own stops the others too (the simulator finishing
 # its scenario: exit status 0; any other node, or a failing simulator: 1).
@@ -19,12 +19,13 @@ fi
 
 usage() {
     cat <<'EOF'
-usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DIR]
+usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DIR] [--foxglove]
 
   --ns NS          namespace of every node (-r __ns:=NS)
   --params FILE    a ROS parameter file given to every node (--params-file)
   --scenario FILE  the scenario sim_node flies (default: the shipped default scenario)
   --logs DIR       folder of the nodes' output (default: runs/bringup/logs)
+  --foxglove       also start foxglove_node: every topic live in Foxglove (ws://127.0.0.1:8765)
 EOF
 }
 
@@ -33,6 +34,7 @@ ns=""
 params=""
 scenario=""
 logs="$root/runs/bringup/logs"
+foxglove=""
 STOP_TIMEOUT_S=5
 
 die() {
@@ -51,6 +53,7 @@ while [ $# -gt 0 ]; do
                 --logs) logs="$2" ;;
             esac
             shift 2 ;;
+        --foxglove) foxglove=1; shift ;;
         -h|--help) usage; exit 0 ;;
         *) usage >&2; die "unknown argument '$1'" ;;
     esac
@@ -64,8 +67,10 @@ logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
 
 names=(sim_node residual_node mhe_node detector_node)
+[ -n "$foxglove" ] && names+=(foxglove_node)
 declare -A packages=([sim_node]=uav_sim [residual_node]=uav_fault_estimator
-                     [mhe_node]=uav_fault_estimator [detector_node]=uav_fault_estimator)
+                     [mhe_node]=uav_fault_estimator [detector_node]=uav_fault_estimator
+                     [foxglove_node]=uav_fault_estimator)
 declare -A pids=()
 
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:
@@ -133,6 +138,9 @@ done
 topic="faults/estimate"
 [ -n "$ns" ] && topic="${ns%/}/$topic"
 echo "bringup.sh: running; watch with: source scripts/env.sh; ros2 topic echo $topic"
+if [ -n "$foxglove" ]; then
+    echo "bringup.sh: live in Foxglove: open a connection to the address in $logs/foxglove_node.log (default ws://127.0.0.1:8765)"
+fi
 echo "bringup.sh: Ctrl-C stops every node"
 
 while true; do

@@ -29,6 +29,7 @@ setup(
             f"mhe_node = {PACKAGE}.nodes.mhe_node:main",
             f"recorder_node = {PACKAGE}.nodes.recorder_node:main",
             f"detector_node = {PACKAGE}.nodes.detector_node:main",
+            f"foxglove_node = {PACKAGE}.nodes.foxglove_node:main",
         ],
     },
 )

@@ -10,14 +10,13 @@ the per-topic counts are logged.
 
 from __future__ import annotations
 
-import importlib
 import sys
 from pathlib import Path
 
-from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile
+from rclpy.topic_endpoint_info import TopicEndpointInfo
 from rosbags.interfaces import (
     Qos,
     QosDurability,
@@ -29,6 +28,7 @@ from rosbags.interfaces import (
 from uav_sim.ros.node_tools import ParameterSpec, declare_parameters, run_node
 
 from uav_fault_estimator.analysis.recording import Recording, project_typestore
+from uav_fault_estimator.nodes.raw_topics import RawTopics
 
 INFINITE_QOS_S, INFINITE_QOS_NS = 2147483647, 4294967295  # rosbag2's "infinite" duration
 PARAMETERS = {
@@ -36,12 +36,6 @@ PARAMETERS = {
     "discovery_period_s": ParameterSpec(
         "how often new topics are looked for [s, wall time]", 0.01, 60.0),
 }
-
-
-def message_class(type_name: str) -> type:
-    """The Python class of a ROS type name such as `std_msgs/msg/Header`."""
-    package, _, name = type_name.split("/")
-    return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
 def bag_qos(profile: QoSProfile) -> Qos:
@@ -66,16 +60,8 @@ def _qos_time(duration: Duration) -> QosTime:
     return QosTime(sec=seconds, nsec=nanoseconds)
 
 
-def subscription_qos(reliable: bool) -> QoSProfile:
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_ALL,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.VOLATILE,
-    )
-
-
 class RecorderNode(Node):
-    """Thin adapter: discovery, raw subscriptions, one Recording."""
+    """Thin adapter: the graph's topics (RawTopics) into one Recording."""
 
     def __init__(self) -> None:
         super().__init__("recorder_node")
@@ -85,33 +71,15 @@ class RecorderNode(Node):
         if not self.parameters["output_dir"] or output.exists():
             raise ValueError(f"output_dir '{output}' must be given and must not exist")
         self.recording = Recording(output, project_typestore())
-        # wall time: with use_sim_time the node's clock stands still until /clock runs
-        self.create_timer(self.parameters["discovery_period_s"], self.discover,
-                          clock=Clock(clock_type=ClockType.STEADY_TIME))
-        self.discover()
+        self.topics = RawTopics(self, self.parameters["discovery_period_s"], self.add_topic,
+                                self.recording.write, purpose="recording")
 
-    def discover(self) -> None:
-        for topic, types in self.get_topic_names_and_types():
-            if topic in self.recording.connections or not types:
-                continue
-            publishers = self.get_publishers_info_by_topic(topic)
-            if not publishers:  # only subscribed to (e.g. /clock, by our own sim time) so far:
-                continue        # nothing to record yet; its QoS comes with its publishers
-            try:
-                self.recording.add_topic(topic, types[0],
-                                         [bag_qos(info.qos_profile) for info in publishers])
-                message_type = message_class(types[0])
-            except (ValueError, AttributeError, ModuleNotFoundError) as error:
-                self.get_logger().warning(f"not recording {topic}: {error}", once=True)
-                continue
-            reliable = all(info.qos_profile.reliability == ReliabilityPolicy.RELIABLE
-                           for info in publishers)
-            self.create_subscription(
-                message_type, topic,
-                lambda data, topic=topic: self.recording.write(
-                    topic, self.get_clock().now().nanoseconds, data),
-                subscription_qos(reliable), raw=True,
-            )
+    def add_topic(self, topic: str, message_type: str,
+                  publishers: list[TopicEndpointInfo]) -> None:
+        """A new topic of the recording, with its publishers' QoS profiles; ValueError for a
+        type the recording cannot decode."""
+        self.recording.add_topic(topic, message_type,
+                                 [bag_qos(info.qos_profile) for info in publishers])
 
     def destroy_node(self) -> None:
         self.recording.close()

@@ -1,0 +1,83 @@
+"""foxglove_node: serves every topic of the graph live on the Foxglove WebSocket protocol.
+
+Topics are discovered while the node runs and subscribed raw, as recorder_node does
+(RawTopics: once they have publishers, with the reliability those offer, keep-all); each
+message goes unchanged (CDR) to its channel of a LiveView, stamped with the receive time on
+the node's clock (simulation time when started with use_sim_time, as bringup.sh starts it).
+Connect Foxglove to ws://HOST:PORT. Reports on /diagnostics; SIGINT stops the server.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.topic_endpoint_info import TopicEndpointInfo
+from uav_sim.ros.node_tools import OK, Diagnostics, ParameterSpec, declare_parameters, run_node
+
+from uav_fault_estimator.analysis.live_view import LiveView
+from uav_fault_estimator.analysis.recording import project_typestore
+from uav_fault_estimator.nodes.raw_topics import RawTopics
+
+PARAMETERS = {
+    "host": ParameterSpec("address the WebSocket server listens on (127.0.0.1: this machine "
+                          "only)"),
+    "port": ParameterSpec("TCP port the WebSocket server listens on (0: one the system "
+                          "chooses, logged)", 0, 65535),
+    "discovery_period_s": ParameterSpec(
+        "how often new topics are looked for [s, wall time]", 0.01, 60.0),
+}
+REPORT_PERIOD_S = 1.0  # how often the diagnostics' counters are refreshed [s, wall time]
+
+
+class FoxgloveNode(Node):
+    """Thin adapter: the graph's topics (RawTopics) into one LiveView."""
+
+    def __init__(self) -> None:
+        super().__init__("foxglove_node")
+        self.parameters = declare_parameters(
+            self, "uav_fault_estimator", "foxglove_node.yaml", PARAMETERS)
+        host, port = self.parameters["host"], self.parameters["port"]
+        try:
+            self.live_view = LiveView(project_typestore(), host, port,
+                                      name=self.get_fully_qualified_name())
+        except RuntimeError as error:  # foxglove's: the address is taken, unknown, ...
+            raise ValueError(f"cannot serve on {host}:{port}: {error}") from None
+        self.get_logger().info(f"serving the graph's topics on {self.live_view.url}")
+        # never stale: a graph with nothing to show is no fault of the viewer
+        self.diagnostics = Diagnostics(self, stale_after_s=None)
+        self.create_timer(REPORT_PERIOD_S, self.report,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.topics = RawTopics(self, self.parameters["discovery_period_s"], self.add_topic,
+                                self.live_view.log, purpose="serving")
+        self.report()
+
+    def add_topic(self, topic: str, message_type: str,
+                  _publishers: list[TopicEndpointInfo]) -> None:
+        """A new channel of the live view; ValueError for a type it cannot describe."""
+        self.live_view.add_topic(topic, message_type)
+
+    def report(self) -> None:
+        """The diagnostics status: topics served, messages forwarded, subscribed clients."""
+        self.diagnostics.update(OK, f"serving {len(self.live_view.channels)} topics on "
+                                f"{self.live_view.url}", {
+                                    "topics": len(self.live_view.channels),
+                                    "messages_forwarded": sum(self.live_view.counts.values()),
+                                    "subscribed_clients": self.live_view.clients.count(),
+                                })
+
+    def destroy_node(self) -> None:
+        self.live_view.close()
+        counts = ", ".join(f"{topic} {count}" for topic, count in
+                           sorted(self.live_view.counts.items()))
+        self.get_logger().info(f"live view on {self.live_view.url} stopped: {counts}")
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node("foxglove_node", FoxgloveNode, args=args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
