@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Starts the nodes live (real time) for interactive use: sim_node, residual_node, mhe_node
 # and detector_node (and foxglove_node with --foxglove), each with `ros2 run` in a process
-# group of its own, their output in one folder.
+# group of its own, their output in one folder. Several --scenario options fly several
+# aircraft in the one domain: vehicle k under /uavk with nodes of its own, on the first
+# simulator's /clock (the others follow it).
 # Ctrl-C (or SIGTERM) stops them all: SIGINT to each group, SIGKILL to what remains after
-# a few seconds. A node ending on its own stops the others too (the simulator finishing
+# a few seconds. A node ending on its own stops the others too (every simulator finishing
 # its scenario: exit status 0; any other node, or a failing simulator: 1).
 #
 # The nodes run on the domain of scripts/env.sh (the checkout's own id, or your
@@ -23,7 +25,8 @@ usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DI
 
   --ns NS          namespace of every node (-r __ns:=NS)
   --params FILE    a ROS parameter file given to every node (--params-file)
-  --scenario FILE  the scenario sim_node flies (default: the shipped default scenario)
+  --scenario FILE  the scenario sim_node flies (default: the shipped default scenario);
+                   given again, another aircraft: vehicles /uav1, /uav2, ... (no --ns)
   --logs DIR       folder of the nodes' output (default: runs/bringup/logs)
   --foxglove       also start foxglove_node: every topic live in Foxglove (ws://127.0.0.1:8765)
 EOF
@@ -32,7 +35,7 @@ EOF
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 ns=""
 params=""
-scenario=""
+scenarios=()
 logs="$root/runs/bringup/logs"
 foxglove=""
 STOP_TIMEOUT_S=5
@@ -49,7 +52,7 @@ while [ $# -gt 0 ]; do
             case "$1" in
                 --ns) ns="$2" ;;
                 --params) params="$(realpath -e -- "$2" 2>/dev/null)" || die "no parameter file '$2'" ;;
-                --scenario) scenario="$(realpath -e -- "$2" 2>/dev/null)" || die "no scenario file '$2'" ;;
+                --scenario) scenarios+=("$(realpath -e -- "$2" 2>/dev/null)") || die "no scenario file '$2'" ;;
                 --logs) logs="$2" ;;
             esac
             shift 2 ;;
@@ -59,6 +62,15 @@ while [ $# -gt 0 ]; do
     esac
 done
 
+# One namespace per vehicle: --ns (or none) for one aircraft, /uav1, /uav2, ... for several.
+if [ ${#scenarios[@]} -gt 1 ]; then
+    [ -n "$ns" ] && die "--ns names the namespace of one aircraft; several --scenario fly /uav1, /uav2, ..."
+    vehicles=()
+    for k in "${!scenarios[@]}"; do vehicles+=("/uav$((k + 1))"); done
+else
+    vehicles=("$ns")
+fi
+
 "$root/scripts/setup.sh"
 # shellcheck disable=SC1091
 source "$root/scripts/env.sh"
@@ -66,29 +78,42 @@ mkdir -p "$logs"
 logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
 
-names=(sim_node residual_node mhe_node detector_node)
-[ -n "$foxglove" ] && names+=(foxglove_node)
 declare -A packages=([sim_node]=uav_sim [residual_node]=uav_fault_estimator
                      [mhe_node]=uav_fault_estimator [detector_node]=uav_fault_estimator
                      [foxglove_node]=uav_fault_estimator)
-declare -A pids=()
+declare -A pids=()        # by node key: <vehicle>/<node>, or <node> alone
+declare -A simulators=()  # the keys of the sim_nodes still flying
 
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:
 # a background job of a script starts with SIGINT ignored, and would keep it ignored.
+# start_node NAME VEHICLE_INDEX (empty: a node of the whole domain, foxglove_node)
 start_node() {
-    local name="$1"
+    local name="$1" index="$2" namespace="" key="$1"
     local ros_args=()
-    [ -n "$ns" ] && ros_args+=(-r "__ns:=$ns")
+    if [ -n "$index" ]; then
+        namespace="${vehicles[$index]}"
+    elif [ ${#vehicles[@]} -eq 1 ]; then
+        namespace="$ns"
+    fi
+    if [ -n "$index" ] && [ ${#vehicles[@]} -gt 1 ]; then
+        key="${namespace#/}/$name"
+        mkdir -p "$logs/${namespace#/}"
+    fi
+    [ -n "$namespace" ] && ros_args+=(-r "__ns:=$namespace")
     [ -n "$params" ] && ros_args+=(--params-file "$params")
-    [ "$name" = sim_node ] && [ -n "$scenario" ] && ros_args+=(-p "scenario:=$scenario")
-    # every node but the simulator runs on its /clock
-    [ "$name" != sim_node ] && ros_args+=(-p use_sim_time:=true)
-    if [ ${#ros_args[@]} -gt 0 ]; then
-        ros_args=(--ros-args "${ros_args[@]}")
+    if [ "$name" = sim_node ] && [ ${#scenarios[@]} -gt 0 ]; then
+        ros_args+=(-p "scenario:=${scenarios[$index]}")
+    fi
+    # every node but the first simulator runs on its /clock
+    if [ "$name" != sim_node ] || [ "$index" != 0 ]; then
+        ros_args+=(-p use_sim_time:=true)
     fi
     setsid env --default-signal=INT \
-        ros2 run "${packages[$name]}" "$name" "${ros_args[@]}" >"$logs/$name.log" 2>&1 &
-    pids[$name]=$!
+        ros2 run "${packages[$name]}" "$name" --ros-args "${ros_args[@]}" \
+        >"$logs/$key.log" 2>&1 &
+    pids[$key]=$!
+    [ "$name" = sim_node ] && simulators[$key]=1
+    return 0
 }
 
 # Whether any process of the node's group still exists.
@@ -132,12 +157,18 @@ trap 'on_signal terminated 143' TERM
 trap 'stop_all' EXIT
 
 echo "bringup.sh: ROS domain $ROS_DOMAIN_ID${ns:+, namespace $ns}; logs in $logs/<node>.log"
-for name in "${names[@]}"; do
-    start_node "$name"
+# the first vehicle's simulator last: the followers wait for the clock it starts
+for ((index = ${#vehicles[@]} - 1; index >= 0; index--)); do
+    for name in residual_node mhe_node detector_node sim_node; do
+        start_node "$name" "$index"
+    done
 done
-topic="faults/estimate"
-[ -n "$ns" ] && topic="${ns%/}/$topic"
-echo "bringup.sh: running; watch with: source scripts/env.sh; ros2 topic echo $topic"
+[ -n "$foxglove" ] && start_node foxglove_node ""
+for namespace in "${vehicles[@]}"; do
+    topic="faults/estimate"
+    [ -n "$namespace" ] && topic="${namespace%/}/$topic"
+    echo "bringup.sh: running; watch with: source scripts/env.sh; ros2 topic echo $topic"
+done
 if [ -n "$foxglove" ]; then
     echo "bringup.sh: live in Foxglove: open a connection to the address in $logs/foxglove_node.log (default ws://127.0.0.1:8765)"
 fi
@@ -148,17 +179,23 @@ while true; do
     status=0
     wait -n -p ended "${pids[@]}" || status=$?
     [ -n "$ended" ] || continue  # woken by a signal whose trap did not exit
-    for name in "${names[@]}"; do
-        if [ "${pids[$name]:-}" = "$ended" ]; then break; fi
+    for key in "${!pids[@]}"; do
+        if [ "${pids[$key]}" = "$ended" ]; then break; fi
     done
-    if [ "$name" = sim_node ] && [ "$status" -eq 0 ]; then
-        echo "bringup.sh: sim_node finished its scenario: stopping the other nodes" >&2
-        stop_all
-        exit 0
+    if [ -n "${simulators[$key]:-}" ] && [ "$status" -eq 0 ]; then
+        unset "simulators[$key]"
+        unset "pids[$key]"
+        if [ ${#simulators[@]} -eq 0 ]; then
+            echo "bringup.sh: every sim_node finished its scenario: stopping the other nodes" >&2
+            stop_all
+            exit 0
+        fi
+        echo "bringup.sh: $key finished its scenario" >&2
+        continue
     fi
     how="status $status"
     [ "$status" -gt 128 ] && how="$how (killed by signal $((status - 128)))"
-    echo "bringup.sh: $name exited with $how (log: $logs/$name.log): stopping the other nodes" >&2
+    echo "bringup.sh: $key exited with $how (log: $logs/$key.log): stopping the other nodes" >&2
     stop_all
     exit 1
 done

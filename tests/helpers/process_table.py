@@ -13,7 +13,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-NODE_NAMES = ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node")
+NODE_NAMES = ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node",
+              "foxglove_node")
 TCP_LISTEN = "0A"  # the state column of /proc/net/tcp for a listening socket
 
 

@@ -1,5 +1,5 @@
 """scripts/bringup.sh: the nodes live under a namespace, and Ctrl-C on the script alone
-stops every one of them."""
+stops every one of them; two aircraft in one domain, ending when both have landed."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ import pytest
 from helpers.process_table import NODE_NAMES, kill_all, processes
 from ros_processes import wait_until
 from uav_fault_msgs.msg import FaultEstimate
+from uav_sim.ros.messages import stamp_seconds
 from uav_sim.ros.node_tools import STREAM_QOS
 
 pytestmark = pytest.mark.integration
@@ -47,3 +48,36 @@ def test_bringup_runs_the_nodes_and_ctrl_c_stops_them_all(
         print(bringup.output())
     finally:
         kill_all(leftovers())
+
+
+@pytest.mark.timeout(120)
+def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
+        start_process, short_scenario, graph, tmp_path) -> None:
+    logs = tmp_path / "logs"
+    topics = {f"/uav{k}/faults/estimate": FaultEstimate for k in (1, 2)}
+    estimates = graph.subscribe(topics, STREAM_QOS)
+    fast = tmp_path / "fast.yaml"  # the leading simulator at 10 times real time
+    fast.write_text("/**/sim_node:\n  ros__parameters:\n    real_time_factor: 10.0\n")
+    scenarios = [str(short_scenario(10.0)), str(short_scenario(10.0, faults=[]))]
+    bringup = start_process([str(BRINGUP), "--scenario", scenarios[0], "--scenario",
+                             scenarios[1], "--params", str(fast), "--logs", str(logs)],
+                            "bringup")
+    assert bringup.wait(60) == 0, bringup.output()
+    graph.spin(5.0)  # the last estimates may still be on their way
+    output = bringup.output()
+    print(output)
+    assert "every sim_node finished its scenario" in output
+    # live: nodes started together may miss the first samples to discovery, never the end
+    ends = [stamp_seconds(received[-1].header.stamp) for received in estimates.values()]
+    counts = [len(received) for received in estimates.values()]
+    print("estimates received:", counts, "last stamps:", ends)
+    assert ends == [10.0, 10.0] and min(counts) >= 10
+    assert {str(path.relative_to(logs)) for path in logs.glob("*/*_node.log")} == {
+        f"uav{k}/{name}.log" for k in (1, 2)
+        for name in ("sim_node", "residual_node", "mhe_node", "detector_node")}
+    assert "following /clock" in (logs / "uav2/sim_node.log").read_text()
+    assert "real-time factor 10" in (logs / "uav1/sim_node.log").read_text()
+    refused = start_process([str(BRINGUP), "--ns", "/a", "--scenario", scenarios[0],
+                             "--scenario", scenarios[1]], "refused")
+    assert refused.wait(10) == 2
+    assert "--ns names the namespace of one aircraft" in refused.output()

@@ -15,6 +15,7 @@ from rclpy.parameter import Parameter
 from ros_processes import ros2_run_argv
 from uav_fault_estimator.nodes import (
     detector_node,
+    foxglove_node,
     mhe_node,
     recorder_node,
     residual_node,
@@ -34,6 +35,7 @@ NODES = {  # name: (package, config file, PARAMETERS)
     "mhe_node": ("uav_fault_estimator", "mhe_node.yaml", mhe_node.PARAMETERS),
     "detector_node": ("uav_fault_estimator", "detector_node.yaml", detector_node.PARAMETERS),
     "recorder_node": ("uav_fault_estimator", "recorder_node.yaml", recorder_node.PARAMETERS),
+    "foxglove_node": ("uav_fault_estimator", "foxglove_node.yaml", foxglove_node.PARAMETERS),
 }
 NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE, Parameter.Type.INTEGER_ARRAY,
            Parameter.Type.DOUBLE_ARRAY)
