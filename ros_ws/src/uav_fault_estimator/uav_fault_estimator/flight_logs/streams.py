@@ -1,0 +1,61 @@
+"""What every flight-log reader yields: streams of samples at their own instants, in SI
+units and FRD body axes, before any resampling. One home for the stream names and their
+columns, shared by the readers, the airframe mapping and the resampling."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+# Stream name -> its columns. The values are SI and in FRD body axes / NED Euler angles
+# whatever the log's own convention (the readers convert); `outputs` is the exception: the
+# raw actuator outputs, one column per output channel, as the log has them (PWM [us] or
+# normalised [-1, 1], FlightLog.output_unit), for the airframe file to map to surfaces.
+BODY_RATES = "body_rates"  # roll_rate, pitch_rate, yaw_rate [rad/s], FRD
+ATTITUDE = "attitude"  # roll, pitch, yaw [rad], FRD body from NED
+AIRSPEED = "airspeed"  # airspeed [m/s]
+OUTPUTS = "outputs"  # output_1 ... output_n, raw
+STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
+    BODY_RATES: ("roll_rate", "pitch_rate", "yaw_rate"),
+    ATTITUDE: ("roll", "pitch", "yaw"),
+    AIRSPEED: ("airspeed",),
+}
+OUTPUT_UNITS = ("pwm_us", "normalised")
+
+
+@dataclass(frozen=True)
+class TimedSeries:
+    """One stream: times_s (n,) strictly increasing [s, from the log's start]; values (n, k);
+    columns (k,) the name of each column."""
+
+    times_s: np.ndarray
+    values: np.ndarray
+    columns: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        if self.values.ndim != 2 or self.values.shape != (self.times_s.size,
+                                                          len(self.columns)):
+            raise ValueError(f"a stream of {self.times_s.size} times and columns "
+                             f"{self.columns} cannot hold values of shape {self.values.shape}")
+        if self.times_s.size > 1 and not np.all(np.diff(self.times_s) > 0):
+            raise ValueError("a stream's times must increase strictly")
+
+    @property
+    def median_period_s(self) -> float:
+        """The median time between samples [s] (inf for fewer than two)."""
+        return float(np.median(np.diff(self.times_s))) if self.times_s.size > 1 else np.inf
+
+
+@dataclass(frozen=True)
+class FlightLog:
+    """A flight as a reader found it: name (the file's stem), source (the path read), format
+    ("ulog", "ros1_bag", "ros2_bag", "csv"), streams by name (STREAM_COLUMNS, OUTPUTS: those
+    the log has), output_unit (OUTPUT_UNITS) of the OUTPUTS stream."""
+
+    name: str
+    source: str
+    format: str
+    streams: Mapping[str, TimedSeries]
+    output_unit: str = "pwm_us"
