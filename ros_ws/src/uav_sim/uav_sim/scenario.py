@@ -9,15 +9,13 @@ ScenarioError naming the file and the key, before anything starts.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from uav_sim.channels import AIR_DATA_CHANNELS, DROPOUT_CHANNELS, FAULT_NAMES
 from uav_sim.paths import scenarios_dir
+from uav_sim.strict_yaml import FileKind, Reader, is_number, load_yaml
 
 # from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
 # the others: JSBSim's MIL-HDBK-1797 presets (uav_sim.wind).
@@ -35,6 +33,10 @@ MAX_WAYPOINTS = 1000
 
 class ScenarioError(ValueError):
     """A scenario file that cannot be flown; the message names the file and the key."""
+
+
+SCENARIO_FILE = FileKind("scenario", ScenarioError, MAX_SCENARIO_BYTES,
+                         "the shipped ones are under 2 kB")
 
 
 @dataclass(frozen=True)
@@ -122,71 +124,7 @@ def default_scenario_path() -> Path:
     return scenarios_dir() / DEFAULT_SCENARIO
 
 
-def _is_number(value: Any) -> bool:
-    """A finite int or float (YAML's true/false are not numbers)."""
-    return not isinstance(value, bool) and isinstance(value, int | float) and math.isfinite(value)
-
-
-class _Reader:
-    """Checks one mapping of the file; every message names the file and the key's path."""
-
-    def __init__(self, path: Path, data: Any, where: str) -> None:
-        self.path = path
-        self.where = where
-        if not isinstance(data, dict):
-            self.fail(f"'{where or 'the file'}' must be a mapping, got {type(data).__name__}")
-        self.data = data
-
-    def fail(self, message: str) -> None:
-        raise ScenarioError(f"scenario {self.path}: {message}")
-
-    def key(self, name: str) -> str:
-        return f"{self.where}.{name}" if self.where else name
-
-    def check_keys(self, required: set[str], optional: set[str] = frozenset()) -> None:
-        for name in self.data:
-            if name not in required | optional:
-                known = ", ".join(sorted(required | optional))
-                self.fail(f"unknown key '{self.key(str(name))}' (known: {known})")
-        for name in sorted(required):
-            if name not in self.data:
-                self.fail(f"missing required key '{self.key(name)}'")
-
-    def number(self, name: str, minimum: float | None = None, positive: bool = False) -> float:
-        value = self.data[name]
-        if not _is_number(value):
-            self.fail(f"'{self.key(name)}' must be a finite number, got {value!r}")
-        if positive and value <= 0:
-            self.fail(f"'{self.key(name)}' must be positive, got {value!r}")
-        if minimum is not None and value < minimum:
-            self.fail(f"'{self.key(name)}' must be at least {minimum:g}, got {value!r}")
-        return float(value)
-
-    def flag(self, name: str, default: bool) -> bool:
-        value = self.data.get(name, default)
-        if not isinstance(value, bool):
-            self.fail(f"'{self.key(name)}' must be true or false, got {value!r}")
-        return value
-
-    def choice(self, name: str, choices: tuple[str, ...]) -> str:
-        value = self.data[name]
-        if value not in choices:
-            self.fail(f"'{self.key(name)}' must be one of {', '.join(choices)}; got {value!r}")
-        return value
-
-    def items(self, name: str) -> list[Any]:
-        value = self.data.get(name, [])
-        if value is None:
-            return []
-        if not isinstance(value, list):
-            self.fail(f"'{self.key(name)}' must be a list, got {type(value).__name__}")
-        return value
-
-    def child(self, name: str) -> _Reader:
-        return _Reader(self.path, self.data[name], self.key(name))
-
-
-def _initial(reader: _Reader) -> InitialCondition:
+def _initial(reader: Reader) -> InitialCondition:
     names = {"latitude_deg", "longitude_deg", "altitude_m", "airspeed_mps", "heading_deg"}
     reader.check_keys(names)
     return InitialCondition(
@@ -198,7 +136,7 @@ def _initial(reader: _Reader) -> InitialCondition:
     )
 
 
-def _wind(reader: _Reader) -> Wind:
+def _wind(reader: Reader) -> Wind:
     reader.check_keys({"north_mps", "east_mps", "down_mps", "turbulence", "filter_time_constant_s"})
     return Wind(
         north_mps=reader.number("north_mps"),
@@ -209,12 +147,12 @@ def _wind(reader: _Reader) -> Wind:
     )
 
 
-def _sensors(reader: _Reader) -> SensorSuite:
+def _sensors(reader: Reader) -> SensorSuite:
     reader.check_keys(set(), {"air_data", "noise"})
     return SensorSuite(air_data=reader.flag("air_data", True), noise=reader.flag("noise", True))
 
 
-def _waypoints(reader: _Reader) -> tuple[tuple[float, float], ...]:
+def _waypoints(reader: Reader) -> tuple[tuple[float, float], ...]:
     points = reader.items("waypoints_ne_m")
     if len(points) < 2:
         reader.fail("'waypoints_ne_m' needs at least two [north_m, east_m] points")
@@ -222,12 +160,12 @@ def _waypoints(reader: _Reader) -> tuple[tuple[float, float], ...]:
         reader.fail(f"'waypoints_ne_m' has {len(points)} points, more than the "
                     f"{MAX_WAYPOINTS} a scenario may have")
     for index, point in enumerate(points):
-        if not (isinstance(point, list) and len(point) == 2 and all(map(_is_number, point))):
+        if not (isinstance(point, list) and len(point) == 2 and all(map(is_number, point))):
             reader.fail(f"'waypoints_ne_m[{index}]' must be [north_m, east_m], got {point!r}")
     return tuple((float(north), float(east)) for north, east in points)
 
 
-def _fault(reader: _Reader) -> SeededFault:
+def _fault(reader: Reader) -> SeededFault:
     reader.check_keys({"name", "start_s", "ramp_s", "magnitude_pct"})
     return SeededFault(
         name=reader.choice("name", FAULT_NAMES),
@@ -237,7 +175,7 @@ def _fault(reader: _Reader) -> SeededFault:
     )
 
 
-def _dropout(reader: _Reader) -> SensorDropout:
+def _dropout(reader: Reader) -> SensorDropout:
     reader.check_keys({"channel", "start_s", "end_s"})
     dropout = SensorDropout(
         channel=reader.choice("channel", DROPOUT_CHANNELS),
@@ -249,46 +187,16 @@ def _dropout(reader: _Reader) -> SensorDropout:
     return dropout
 
 
-def _read_text(path: Path) -> str:
-    """The file's text; ScenarioError when it cannot be read, is larger than
-    MAX_SCENARIO_BYTES (checked before it is parsed, and read no further than that) or is
-    not UTF-8."""
-    try:
-        with path.open("rb") as file:
-            content = file.read(MAX_SCENARIO_BYTES + 1)
-    except OSError as error:
-        reason = error.strerror or type(error).__name__
-        raise ScenarioError(f"scenario {path}: cannot read the file ({reason})") from None
-    if len(content) > MAX_SCENARIO_BYTES:
-        raise ScenarioError(
-            f"scenario {path}: larger than {MAX_SCENARIO_BYTES // 1024} KiB, the most a "
-            "scenario file may be (the shipped ones are under 2 kB)")
-    try:
-        return content.decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise ScenarioError(
-            f"scenario {path}: not UTF-8 text (byte 0x{content[error.start]:02x} at offset "
-            f"{error.start})") from None
-
-
 def load_scenario(path: str | Path) -> Scenario:
     """Read and check a scenario file; raises ScenarioError with one clear message."""
     path = Path(path)
-    try:
-        data = yaml.safe_load(_read_text(path))
-    except yaml.YAMLError as error:
-        raise ScenarioError(f"scenario {path}: not valid YAML ({' '.join(str(error).split())})"
-                            ) from None
-    except RecursionError:
-        raise ScenarioError(f"scenario {path}: not valid YAML (nested too deeply)") from None
-    reader = _Reader(path, data, "")
+    reader = load_yaml(SCENARIO_FILE, path)
+    data = reader.data
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
         {"sensors", "faults", "sensor_dropouts", "estimator"},
     )
-    if not isinstance(data["name"], str) or not data["name"]:
-        reader.fail(f"'name' must be a non-empty string, got {data['name']!r}")
-    if data["name"] in (".", "..") or any(c in data["name"] for c in "/\\\0"):
+    if reader.text("name") in (".", "..") or any(c in data["name"] for c in "/\\\0"):
         # demo.sh's default output folder is runs/<name>/
         reader.fail(f"'name' must be usable as a folder name (no '/', '\\', NUL, not '.' "
                     f"or '..'), got {data['name']!r}")
@@ -300,8 +208,8 @@ def load_scenario(path: str | Path) -> Scenario:
         reader.fail("'estimator' must be a mapping of estimator parameters")
     sensors = _sensors(reader.child("sensors")) if "sensors" in data else SensorSuite()
     dropouts = tuple(
-        _dropout(_Reader(path, item, f"sensor_dropouts[{index}]"))
-        for index, item in enumerate(reader.items("sensor_dropouts"))
+        _dropout(reader.element("sensor_dropouts", index))
+        for index in range(len(reader.items("sensor_dropouts")))
     )
     for index, dropout in enumerate(dropouts):
         if dropout.channel in AIR_DATA_CHANNELS and not sensors.air_data:
@@ -316,8 +224,8 @@ def load_scenario(path: str | Path) -> Scenario:
         wind=_wind(reader.child("wind")),
         sensors=sensors,
         faults=tuple(
-            _fault(_Reader(path, item, f"faults[{index}]"))
-            for index, item in enumerate(reader.items("faults"))
+            _fault(reader.element("faults", index))
+            for index in range(len(reader.items("faults")))
         ),
         sensor_dropouts=dropouts,
         estimator=dict(estimator),
