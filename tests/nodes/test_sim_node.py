@@ -6,6 +6,7 @@ from __future__ import annotations
 import subprocess
 
 import pytest
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3Stamped
 from ros_processes import ros2_run_argv
 from rosgraph_msgs.msg import Clock
@@ -90,3 +91,30 @@ def test_sim_node_with_a_missing_scenario_ends_with_one_message(tmp_path):
     assert result.returncode == 2  # bad input
     assert "Traceback" not in result.stderr
     assert str(missing) in result.stderr
+
+
+@pytest.mark.timeout(120)
+def test_a_simulator_on_sim_time_follows_the_clock_and_ends_when_it_stops(
+        short_scenario, graph, start_process):
+    """The second vehicle's simulator: it steps only as far as /clock goes (its state stamps
+    never run ahead of the clock), and a clock that stops before its scenario's end ends it
+    with one line and status 2 after clock_stall_s."""
+    states = graph.subscribe({"/state": AircraftState}, STREAM_QOS)["/state"]
+    clock = graph.node.create_publisher(Clock, "/clock", 10)
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
+        "-p", f"scenario:={short_scenario(DURATION_S)}", "-p", "use_sim_time:=true",
+        "-p", "clock_stall_s:=2.0", "-p", "wait_for_subscribers:=1"]), "sim_node")
+    assert graph.wait_for_publishers("/state", 1, timeout_s=30)
+    graph.spin(1.0)  # discovery settles in the simulator too
+    assert graph.node.count_publishers("/clock") == 1  # this test's: the simulator follows
+    for step in range(1, 41):  # the clock to 2 s, then no more
+        clock_s = step / RATE_HZ
+        clock.publish(Clock(clock=Time(sec=int(clock_s), nanosec=round(clock_s % 1 * 1e9))))
+        graph.spin(0.02)
+    graph.spin(2.0)
+    stamps = [stamp_seconds(message.header.stamp) for message in states]
+    print(f"{len(stamps)} states, the last at {stamps[-1]} s")
+    assert stamps == pytest.approx([k / RATE_HZ for k in range(41)])
+    assert sim.wait(timeout_s=30) == 2, sim.output()
+    assert ("the /clock it follows stood still at 2 s for 2 s of wall time, before this "
+            "scenario's end at 10 s") in sim.output()

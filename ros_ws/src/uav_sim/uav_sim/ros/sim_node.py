@@ -57,6 +57,10 @@ PARAMETERS = {
     "real_time_factor": ParameterSpec(
         "simulated seconds per wall second; 0: as fast as subscribers keep up", 0.0, 1000.0,
         live=True),
+    # longer by default than a leading simulator's own waits for acknowledgements (10 s)
+    "clock_stall_s": ParameterSpec(
+        "with use_sim_time: how long the followed /clock may stand still once running before "
+        "the node gives up [s, wall time]", 0.1, 3600.0),
     "wait_for_subscribers": ParameterSpec(
         "start once state has this many subscriptions and discovery settled", 0, 100),
 }
@@ -128,10 +132,25 @@ class SimNode(Node):
 
     def wait_for_clock(self, time_s: float) -> None:
         """Block until the domain's /clock has reached time_s [s] (within the grid's
-        tolerance), handling callbacks meanwhile."""
-        while rclpy.ok() and (self.get_clock().now().nanoseconds / NANOSECONDS_PER_SECOND
-                              < time_s - GRID_TOLERANCE_S):
+        tolerance), handling callbacks meanwhile. ValueError (status 2) when the clock,
+        once running, stands still for clock_stall_s: its simulator ended before this
+        scenario's end, so the scenarios do not last as long."""
+        stall_s = self.parameters["clock_stall_s"]
+        clock_s, changed_at = self.clock_s(), time.monotonic()
+        while rclpy.ok() and clock_s < time_s - GRID_TOLERANCE_S:
             rclpy.spin_once(self, timeout_sec=CLOCK_POLL_S)
+            if self.clock_s() != clock_s:
+                clock_s, changed_at = self.clock_s(), time.monotonic()
+            elif clock_s > 0 and time.monotonic() - changed_at > stall_s:
+                raise ValueError(
+                    f"the /clock it follows stood still at {clock_s:g} s for "
+                    f"{stall_s:g} s of wall time, before this scenario's end at "
+                    f"{self.scenario.duration_s:g} s: the vehicles' scenarios must last as "
+                    "long")
+
+    def clock_s(self) -> float:
+        """The node's clock [s]: the domain's /clock when following it."""
+        return self.get_clock().now().nanoseconds / NANOSECONDS_PER_SECOND
 
     def wait_until_delivered(self) -> None:
         """Block until every subscriber has acknowledged what was published (no loss), in
