@@ -17,12 +17,19 @@ BODY_RATES = "body_rates"  # roll_rate, pitch_rate, yaw_rate [rad/s], FRD
 ATTITUDE = "attitude"  # roll, pitch, yaw [rad], FRD body from NED
 AIRSPEED = "airspeed"  # airspeed [m/s]
 OUTPUTS = "outputs"  # output_1 ... output_n, raw
+# The surfaces already as deflections (the project's own recordings, /controls): aileron,
+# elevator, rudder [rad, ControlInputs.msg's signs], throttle [0, 1]; no airframe file needed.
+SURFACES = "surfaces"
 STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
     BODY_RATES: ("roll_rate", "pitch_rate", "yaw_rate"),
     ATTITUDE: ("roll", "pitch", "yaw"),
     AIRSPEED: ("airspeed",),
+    SURFACES: ("aileron", "elevator", "rudder", "throttle"),
 }
 OUTPUT_UNITS = ("pwm_us", "normalised")
+# What a log's airspeed is: true (TAS), calibrated (CAS) or indicated (IAS); the readers say
+# which one they found (FlightLog.airspeed_source).
+AIRSPEED_SOURCES = ("true", "calibrated", "indicated")
 
 
 @dataclass(frozen=True)
@@ -52,10 +59,30 @@ class TimedSeries:
 class FlightLog:
     """A flight as a reader found it: name (the file's stem), source (the path read), format
     ("ulog", "ros1_bag", "ros2_bag", "csv"), streams by name (STREAM_COLUMNS, OUTPUTS: those
-    the log has), output_unit (OUTPUT_UNITS) of the OUTPUTS stream."""
+    the log has), output_unit (OUTPUT_UNITS) of the OUTPUTS stream, airspeed_source
+    (AIRSPEED_SOURCES: which airspeed the AIRSPEED stream holds, "" when the log has none)."""
 
     name: str
     source: str
     format: str
     streams: Mapping[str, TimedSeries]
     output_unit: str = "pwm_us"
+    airspeed_source: str = ""
+
+
+def ordered_series(times_s: np.ndarray, values: np.ndarray,
+                   columns: tuple[str, ...]) -> TimedSeries | None:
+    """A stream from a log's samples as they come: times_s (n,) [s], values (n, k). Real logs
+    repeat stamps and deliver late messages: the samples are put in time order and of
+    samples with the same time the first in the log is kept; samples without a finite time
+    are dropped. None when no sample is left."""
+    times_s = np.asarray(times_s, dtype=float)
+    values = np.asarray(values, dtype=float).reshape(times_s.size, len(columns))
+    finite = np.isfinite(times_s)
+    times_s, values = times_s[finite], values[finite]
+    if times_s.size == 0:
+        return None
+    order = np.argsort(times_s, kind="stable")
+    times_s, values = times_s[order], values[order]
+    first = np.concatenate(([True], np.diff(times_s) > 0))
+    return TimedSeries(times_s[first], values[first], tuple(columns))
