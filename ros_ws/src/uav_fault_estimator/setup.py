@@ -14,8 +14,9 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        (f"share/{PACKAGE}/config",
-         [str(path.relative_to(HERE)) for path in sorted((HERE / "config").glob("*.yaml"))]),
+        *[(f"share/{PACKAGE}/{folder}",
+           [str(path.relative_to(HERE)) for path in sorted((HERE / folder).glob("*.yaml"))])
+          for folder in ("config", "config/airframes")],
     ],
     install_requires=["setuptools"],
     zip_safe=True,
