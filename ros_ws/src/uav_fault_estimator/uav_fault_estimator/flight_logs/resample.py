@@ -1,0 +1,221 @@
+"""Asynchronous log streams onto the detector's sample grid (issue 17).
+
+The detector takes state and controls with one stamp, on whole multiples of its
+calibration's sample_period_s (0.2 s); a log's streams come at their own rates and instants
+(rates at 2.5-250 Hz, servo outputs at 3-50 Hz, airspeed at 10 Hz). Each grid point t takes
+the stream's two neighbouring samples, the last at or before t and the first at or after it
+(a sample within uav_sim.sample_grid.GRID_TOLERANCE_S of t counts as at t: stamps rounded to
+the microsecond), and:
+
+- continuous signals (body rates, attitude, airspeed) are interpolated linearly between
+  them: these signals are smooth on the scale of the sample intervals, linear interpolation
+  is exact on a ramp, and it adds no overshoot or values the aircraft never had (as splines
+  can). Angles go the short way round and stay in (-pi, pi] (yaw crosses +-pi).
+- actuator commands (surfaces, throttle) are held from the last sample (zero-order hold):
+  an autopilot's output is piecewise constant between its updates, so the value in force at
+  t is the last one sent, and interpolating would invent a command sent earlier than it was.
+
+A grid point is missing (NaN), not invented, when it lies before a stream's first or after
+its last sample (nothing is extrapolated) or when its neighbouring samples are further
+apart than the stream's max gap: GAP_FACTOR times its median period by default. A stream
+slower than the grid (median period above the grid period) is said in one line: most of its
+grid points are then interpolated or held rather than measured.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from uav_sim.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_sim.sample_grid import GRID_TOLERANCE_S
+
+from uav_fault_estimator.flight_logs.airframe import (
+    Airframe,
+    mixed_output_mismatches,
+    surface_deflections,
+)
+from uav_fault_estimator.flight_logs.streams import (
+    AIRSPEED,
+    ATTITUDE,
+    BODY_RATES,
+    OUTPUTS,
+    SURFACES,
+    FlightLog,
+    TimedSeries,
+)
+
+# Samples further apart than this many median periods are a gap (a dropout), not jitter:
+# logged intervals of a healthy stream vary by tens of percent, a lost sample doubles one.
+GAP_FACTOR = 2.5
+
+
+def grid_times_s(start_s: float, end_s: float, period_s: float) -> np.ndarray:
+    """The whole multiples k * period_s [s] from start_s to end_s [s] (both included, within
+    GRID_TOLERANCE_S), as the detector's on_grid() recognises them; empty when none."""
+    tolerance = GRID_TOLERANCE_S / period_s
+    first = math.ceil(start_s / period_s - tolerance)
+    last = math.floor(end_s / period_s + tolerance)
+    return np.arange(first, last + 1) * period_s
+
+
+def _neighbours(times_s: np.ndarray, grid_s: np.ndarray,
+                gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For every grid point: the index of the last sample at or before it, of the first at or
+    after it (the same index for a grid point on a sample), and whether both exist and lie
+    at most gap_s [s] apart."""
+    left = np.searchsorted(times_s, grid_s + GRID_TOLERANCE_S, side="right") - 1
+    right = np.searchsorted(times_s, grid_s - GRID_TOLERANCE_S, side="left")
+    inside = (left >= 0) & (right < times_s.size)
+    # indices for every grid point (times_s is not empty), used only where inside
+    left, right = np.clip(left, 0, None), np.clip(right, None, times_s.size - 1)
+    valid = inside & (np.abs(times_s[right] - times_s[left]) <= gap_s)
+    return left, right, valid
+
+
+def max_gap_s(series: TimedSeries) -> float:
+    """The longest interval [s] between two samples of series that is not a gap."""
+    return GAP_FACTOR * series.median_period_s
+
+
+def _wrap_rad(angle_rad: np.ndarray) -> np.ndarray:
+    """Angles [rad] into (-pi, pi]; those already in it unchanged to the last bit."""
+    return angle_rad - 2.0 * np.pi * np.ceil((angle_rad - np.pi) / (2.0 * np.pi))
+
+
+# How a stream is resampled: linear interpolation, the same for angles (the short way round
+# into (-pi, pi]), or zero-order hold (the module's docstring says which suits what).
+LINEAR, ANGULAR, HOLD = "linear", "angular", "hold"
+
+
+def resample(series: TimedSeries, grid_s: np.ndarray, method: str,
+             gap_s: float | None = None) -> np.ndarray:
+    """Every column of series at the grid points grid_s (K,) [s] -> (K, k), by method
+    (LINEAR, ANGULAR or HOLD); NaN before the first and after the last sample and between
+    neighbouring samples further apart than gap_s [s] (default max_gap_s(series))."""
+    if method not in (LINEAR, ANGULAR, HOLD):
+        raise ValueError(f"resampling method {method!r}: expected {LINEAR}, {ANGULAR} or {HOLD}")
+    values = np.full((grid_s.size, len(series.columns)), np.nan)
+    if series.times_s.size == 0:
+        return values
+    times_s = series.times_s
+    left, right, valid = _neighbours(times_s, grid_s, max_gap_s(series) if gap_s is None
+                                     else gap_s)
+    start = series.values[left[valid]]
+    if method == HOLD:
+        values[valid] = start
+        return values
+    end = series.values[right[valid]]
+    span_s = times_s[right[valid]] - times_s[left[valid]]
+    elapsed_s = grid_s[valid] - times_s[left[valid]]
+    # 0 on a sample; clipped for a grid point within the tolerance before one
+    weight = np.clip(np.divide(elapsed_s, span_s, out=np.zeros_like(span_s),
+                               where=span_s > 0), 0.0, 1.0)[:, None]
+    if method == ANGULAR:
+        values[valid] = _wrap_rad(start + weight * _wrap_rad(end - start))
+    else:
+        values[valid] = start + weight * (end - start)
+    return values
+
+
+def slow_stream_warning(name: str, series: TimedSeries, period_s: float) -> str | None:
+    """One line when the stream's median period is longer than the grid's period_s [s]."""
+    stream_period_s = series.median_period_s
+    if stream_period_s <= period_s:
+        return None
+    return (f"stream {name} is slower than the detector's grid: a sample every "
+            f"{stream_period_s:.3f} s ({1.0 / stream_period_s:.2f} Hz) against "
+            f"{period_s:g} s; between its samples the grid points are estimated, not measured")
+
+
+@dataclass(frozen=True)
+class DetectorInputs:
+    """A log on the detector's grid: times_s (K,) [s], state (K, 14) and controls (K, 7) in
+    uav_sim.channels order (NaN where the log has no such channel, before or after a stream,
+    in its gaps), airspeed_mps (K,) (NaN likewise), and one line per thing to know
+    (slow streams, absent streams, mixed outputs the log contradicts)."""
+
+    times_s: np.ndarray
+    state: np.ndarray
+    controls: np.ndarray
+    airspeed_mps: np.ndarray
+    warnings: tuple[str, ...]
+
+    @property
+    def flight(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(times_s, state, controls): what self_tuning.run_detector and calibrate take."""
+        return self.times_s, self.state, self.controls
+
+
+def _surfaces(log: FlightLog, airframe: Airframe | None) -> tuple[str, TimedSeries]:
+    """The surface deflections and the stream they come from: the log's own SURFACES (the
+    project's recordings), else its OUTPUTS through the airframe; ValueError without either."""
+    if SURFACES in log.streams:
+        return SURFACES, log.streams[SURFACES]
+    if airframe is None:
+        raise ValueError(f"log {log.source}: actuator outputs need an airframe file to "
+                         "become surface deflections")
+    return OUTPUTS, surface_deflections(log, airframe)
+
+
+def _fill(target: np.ndarray, channels: tuple[str, ...], columns: tuple[str, ...],
+          values: np.ndarray) -> None:
+    """target[:, channel] = values[:, column] for each column (named as its channel)."""
+    for index, column in enumerate(columns):
+        target[:, channels.index(column)] = values[:, index]
+
+
+def detector_samples(log: FlightLog, airframe: Airframe | None,
+                     period_s: float) -> DetectorInputs:
+    """The log on the grid of period_s [s] (the calibration's sample_period_s): every
+    multiple of it where both the body rates and the surfaces have begun and not yet ended
+    (the detector can use no other). Rates, attitude and airspeed interpolated, surfaces held
+    (the module's docstring). airframe maps the log's OUTPUTS (None for a log with SURFACES).
+    ValueError (one line) without body rates or surfaces, or when they do not overlap."""
+    if BODY_RATES not in log.streams:
+        raise ValueError(f"log {log.source}: no body rates, which the detector needs")
+    rates = log.streams[BODY_RATES]
+    surfaces_name, surfaces = _surfaces(log, airframe)
+    times_s = np.zeros(0)
+    if rates.times_s.size and surfaces.times_s.size:
+        times_s = grid_times_s(max(rates.times_s[0], surfaces.times_s[0]),
+                               min(rates.times_s[-1], surfaces.times_s[-1]), period_s)
+    if times_s.size == 0:
+        raise ValueError(f"log {log.source}: its body rates and surfaces share no instant "
+                         f"of the {period_s:g} s grid")
+    state = np.full((times_s.size, len(STATE_CHANNELS)), np.nan)
+    controls = np.full((times_s.size, len(CONTROL_CHANNELS)), np.nan)
+    airspeed_mps = np.full(times_s.size, np.nan)
+    _fill(state, STATE_CHANNELS, rates.columns, resample(rates, times_s, LINEAR))
+    _fill(controls, CONTROL_CHANNELS, surfaces.columns, resample(surfaces, times_s, HOLD))
+    if ATTITUDE in log.streams:
+        attitude = log.streams[ATTITUDE]
+        _fill(state, STATE_CHANNELS, attitude.columns, resample(attitude, times_s, ANGULAR))
+    if AIRSPEED in log.streams:
+        airspeed_mps = resample(log.streams[AIRSPEED], times_s, LINEAR)[:, 0]
+    return DetectorInputs(times_s, state, controls, airspeed_mps,
+                          tuple(_warnings(log, airframe, surfaces_name, surfaces, period_s)))
+
+
+def _warnings(log: FlightLog, airframe: Airframe | None, surfaces_name: str,
+              surfaces: TimedSeries, period_s: float) -> list[str]:
+    """detector_samples' lines: streams absent or slower than the grid, an airspeed other
+    than the airframe names, mixed outputs the log contradicts."""
+    lines = [f"log {log.source}: no {name} stream (NaN on the grid)"
+             for name in (ATTITUDE, AIRSPEED) if name not in log.streams]
+    streams = {name: log.streams[name] for name in (BODY_RATES, ATTITUDE, AIRSPEED)
+               if name in log.streams}
+    for name, series in {**streams, surfaces_name: surfaces}.items():
+        line = slow_stream_warning(name, series, period_s)
+        if line is not None:
+            lines.append(f"log {log.source}: {line}")
+    if airframe is None:
+        return lines
+    wanted = airframe.airspeed_source
+    if wanted and log.airspeed_source and wanted != log.airspeed_source:
+        lines.append(f"log {log.source}: its airspeed is {log.airspeed_source}, airframe "
+                     f"{airframe.path} names {wanted}")
+    if surfaces_name == OUTPUTS:
+        lines += mixed_output_mismatches(log, airframe)
+    return lines
