@@ -1,0 +1,141 @@
+"""Per-topic CSV files exported from bags, one folder a flight, as flight logs.
+
+The layouts bag exporters write: one file a topic, named after it (/mavros/imu/data:
+mavros-imu-data.csv, _mavros_imu_data.csv or mavros_imu_data.csv), a header row of the
+log time and the message's fields by dotted path with a prefix `field.` (rostopic echo -p,
+"%time,field.header.stamp,...") or `.` ("time,.header.stamp.secs,.header.stamp.nsecs,...").
+Stamps are one column in nanoseconds (`header.stamp`) or two (`header.stamp.secs`/`nsecs`,
+ROS 1; `header.stamp.sec`/`nanosec`, ROS 2); the log time `time` is in nanoseconds when
+written as an integer above 1e12 (rostopic), in seconds otherwise. Arrays are one column an
+element (`channels0`, `channels_0` or `channels[0]`) or one column of a bracketed list
+("[1500, 1500]" or "(1500, 1500)"). The topics and their meaning are topics.py's, shared
+with the bags; times are in seconds from the earliest log time of the files read.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from uav_fault_estimator.flight_logs.streams import FlightLog
+from uav_fault_estimator.flight_logs.topics import (
+    MEANINGS,
+    LogStreams,
+    checked_topics,
+    message_times_s,
+    padded_rows,
+)
+
+NANOSECONDS_ABOVE = 1e12  # a log time written as an integer above this is in nanoseconds
+_STAMP_PAIRS = (("header.stamp.secs", "header.stamp.nsecs"),
+                ("header.stamp.sec", "header.stamp.nanosec"))
+
+
+def topic_file_key(name: str) -> str:
+    """A topic name or a CSV file's stem, reduced to what both spell alike: "/mavros/vfr_hud",
+    "mavros-vfr_hud" and "_mavros_vfr_hud" all give "mavros_vfr_hud"."""
+    return re.sub(r"[/\-_]+", "_", name).strip("_")
+
+
+def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
+                    axes: str | None = None) -> FlightLog:
+    """The flight in a folder of per-topic CSV files. topics: topic name -> meaning
+    (topics.MEANINGS; default topics.DEFAULT_TOPICS); a topic without a file gives no stream.
+    axes ("FRD" or "FLU") overrides each message type's own convention. ValueError (one line
+    naming the file) when a file lacks a field its topic needs or a value is not a number."""
+    folder = Path(folder)
+    topics = checked_topics(topics)
+    files = {topic_file_key(path.stem): path for path in sorted(folder.glob("*.csv"))}
+    tables = {topic: _table(files[topic_file_key(topic)]) for topic in topics
+              if topic_file_key(topic) in files}
+    if not files:
+        raise ValueError(f"{folder}: no CSV files (one a topic, named after it)")
+    log_times = [t for table in tables.values() for t in _log_times_ns(table)]
+    start_ns = min(log_times) if log_times else min(
+        (int(t) for table in tables.values() for t in _stamps_ns(table) if t > 0), default=0)
+    merged = LogStreams()
+    for topic, table in sorted(tables.items()):
+        meaning = MEANINGS[topics[topic]]
+        path = files[topic_file_key(topic)]
+        try:
+            fields = {name: (_array_field(table, name) if name in meaning.array_fields
+                             else _numbers(table, name)) for name in meaning.fields}
+            stamps_ns = _stamps_ns(table)
+            log_ns = _log_times_ns(table)
+            times_s = message_times_s(stamps_ns, log_ns if log_ns.size else stamps_ns,
+                                      start_ns)
+            merged.add(topic, meaning, meaning.streams(times_s, fields, axes or meaning.axes))
+        except (KeyError, ValueError) as error:
+            reason = error.args[0] if error.args else type(error).__name__
+            raise ValueError(f"{path}: {reason}") from None
+    return FlightLog(name=folder.name, source=str(folder), format="csv",
+                     streams=merged.streams, airspeed_source=merged.airspeed_source)
+
+
+def _table(path: Path) -> dict[str, list[str]]:
+    """A CSV file's columns by field path (prefixes `%`, `field.` and `.` dropped)."""
+    with path.open(newline="") as file:
+        rows = list(csv.reader(file))
+    if not rows:
+        raise ValueError(f"{path}: empty (expected a header row)")
+    names = [re.sub(r"^%?(field)?\.?", "", name.strip()) for name in rows[0]]
+    return {name: [row[k] if k < len(row) else "" for row in rows[1:]]
+            for k, name in enumerate(names)}
+
+
+def _numbers(table: dict[str, list[str]], name: str) -> np.ndarray:
+    """A column as floats; KeyError naming a missing field, ValueError a bad value."""
+    if name not in table:
+        raise KeyError(f"no column for field {name}")
+    try:
+        return np.array([float(text) if text.strip() else np.nan for text in table[name]])
+    except ValueError:
+        raise ValueError(f"field {name}: a value that is not a number") from None
+
+
+def _integers(table: dict[str, list[str]], name: str) -> np.ndarray:
+    """A column of integers exactly (stamps in nanoseconds exceed a float's precision)."""
+    try:
+        return np.array([int(text) if text.strip() else 0 for text in table[name]],
+                        dtype=np.int64)
+    except ValueError:
+        raise ValueError(f"field {name}: a value that is not an integer") from None
+
+
+def _stamps_ns(table: dict[str, list[str]]) -> np.ndarray:
+    """The header stamps [ns] (n,), zeros where the topic has no header."""
+    if "header.stamp" in table:
+        return _integers(table, "header.stamp")
+    for seconds, nanoseconds in _STAMP_PAIRS:
+        if seconds in table and nanoseconds in table:
+            return (_integers(table, seconds) * 1_000_000_000
+                    + _integers(table, nanoseconds))
+    return np.zeros(len(next(iter(table.values()), [])), dtype=np.int64)
+
+
+def _log_times_ns(table: dict[str, list[str]]) -> np.ndarray:
+    """The log times [ns] (n,) from the `time` column; empty without one."""
+    if "time" not in table:
+        return np.zeros(0, dtype=np.int64)
+    texts = table["time"]
+    if all(re.fullmatch(r"\s*\d+\s*", text) for text in texts) and texts and \
+            int(texts[0]) > NANOSECONDS_ABOVE:
+        return _integers(table, "time")
+    return np.round(_numbers(table, "time") * 1e9).astype(np.int64)
+
+
+def _array_field(table: dict[str, list[str]], name: str) -> np.ndarray:
+    """An array field (n, k): from one column an element, or one column of lists."""
+    element = re.compile(rf"^{re.escape(name)}(?:_?(\d+)|\[(\d+)\])$")
+    indexed = {int(match[1] or match[2]): column for column in table
+               if (match := element.match(column))}
+    if indexed:
+        return np.column_stack([_numbers(table, indexed[k]) for k in sorted(indexed)])
+    if name not in table:
+        raise KeyError(f"no column for field {name}")
+    return padded_rows([[float(x) for x in re.findall(r"[-+0-9.eE]+", text)]
+                        for text in table[name]])

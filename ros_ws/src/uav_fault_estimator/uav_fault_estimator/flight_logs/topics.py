@@ -1,0 +1,219 @@
+"""What the topics of a ROS log mean: MAVROS's message types and the project's own, as
+streams (streams.py). One home for the field meanings, shared by the bag reader (bags.py)
+and the reader of per-topic CSV exports (csv_logs.py): both hand over a topic's fields as
+arrays by dotted path relative to the message ("angular_velocity.x"; an array field such as
+RCOut's "channels" as (n, k)) and its message times.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from rosbags.typesys import get_types_from_msg
+from rosbags.typesys.store import Typestore
+from uav_sim.channels import (
+    AIR_DATA_FIELDS,
+    CONTROL_CHANNELS,
+    CONTROL_UNITS,
+    STATE_CHANNELS,
+    STATE_UNITS,
+    field_name,
+)
+
+from uav_fault_estimator.flight_logs.axes import body_rates_frd, euler_frd, euler_from_quaternions
+from uav_fault_estimator.flight_logs.streams import (
+    AIRSPEED,
+    ATTITUDE,
+    BODY_RATES,
+    OUTPUTS,
+    STREAM_COLUMNS,
+    SURFACES,
+    TimedSeries,
+    ordered_series,
+)
+
+# MAVROS's own message types are not in rosbags' type stores. Their definitions, as
+# mavros_msgs/msg/RCOut.msg and VFR_HUD.msg have them in the mavros repository (ROS 1 and
+# ROS 2 alike; comments dropped).
+MAVROS_DEFINITIONS: Mapping[str, str] = {
+    "mavros_msgs/msg/RCOut": "std_msgs/Header header\nuint16[] channels\n",
+    "mavros_msgs/msg/VFR_HUD": (
+        "std_msgs/Header header\n"
+        "float32 airspeed\n"  # m/s; MAVLink: calibrated or indicated for a fixed wing
+        "float32 groundspeed\n"
+        "int16 heading\n"
+        "float32 throttle\n"
+        "float32 altitude\n"
+        "float32 climb\n"
+    ),
+}
+
+Fields = Mapping[str, np.ndarray]
+Streams = dict[str, TimedSeries]
+
+
+@dataclass(frozen=True)
+class TopicMeaning:
+    """How one message type becomes streams: its type, the fields it reads (dotted paths;
+    arrays named bare), which of them are arrays, the axes of its rates and attitude
+    ("FRD" or "FLU", axes.py), the airspeed it holds (streams.AIRSPEED_SOURCES, "" none) and
+    streams(times_s, fields, axes) -> the streams by name."""
+
+    message_type: str
+    fields: tuple[str, ...]
+    array_fields: tuple[str, ...]
+    axes: str
+    airspeed_source: str
+    streams: Callable[[np.ndarray, Fields, str], Streams]
+
+
+def _columns(fields: Fields, names: tuple[str, ...]) -> np.ndarray:
+    """The named fields side by side (n, len(names)) as floats."""
+    return np.column_stack([np.asarray(fields[name], dtype=float) for name in names])
+
+
+def _streams(times_s: np.ndarray, **values: np.ndarray) -> Streams:
+    """The streams by name (STREAM_COLUMNS) of values at times_s; an empty or all-NaN stream
+    left out (MAVROS's imu/data_raw has no orientation: an all-zero quaternion)."""
+    streams = {}
+    for name, value in values.items():
+        series = ordered_series(times_s, value, STREAM_COLUMNS[name])
+        if series is not None and not np.isnan(series.values).all():
+            streams[name] = series
+    return streams
+
+
+def _imu(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """sensor_msgs/Imu: angular_velocity [rad/s] and orientation (body to world)."""
+    rates = _columns(fields, tuple(f"angular_velocity.{axis}" for axis in "xyz"))
+    quaternions = _columns(fields, tuple(f"orientation.{axis}" for axis in "wxyz"))
+    return _streams(times_s, **{BODY_RATES: body_rates_frd(rates, axes),
+                                ATTITUDE: euler_from_quaternions(quaternions, axes)})
+
+
+def _rc_out(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """mavros_msgs/RCOut: channels [PWM us], one output column each."""
+    channels = np.asarray(fields["channels"], dtype=float)
+    columns = tuple(f"output_{k + 1}" for k in range(channels.shape[1]))
+    series = ordered_series(times_s, channels, columns)
+    return {OUTPUTS: series} if series is not None else {}
+
+
+def _vfr_hud(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """mavros_msgs/VFR_HUD: airspeed [m/s]."""
+    return _streams(times_s, **{AIRSPEED: _columns(fields, ("airspeed",))})
+
+
+STATE_FIELDS = dict(zip(STATE_CHANNELS, map(field_name, STATE_CHANNELS, STATE_UNITS),
+                        strict=True))
+CONTROL_FIELDS = dict(zip(CONTROL_CHANNELS, map(field_name, CONTROL_CHANNELS, CONTROL_UNITS),
+                          strict=True))
+_RATES = ("roll_rate", "pitch_rate", "yaw_rate")
+_EULER = ("roll", "pitch", "yaw")
+
+
+def _state(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """uav_fault_msgs/AircraftState: body rates [rad/s] and Euler angles [rad]."""
+    rates = _columns(fields, tuple(STATE_FIELDS[name] for name in _RATES))
+    euler = _columns(fields, tuple(STATE_FIELDS[name] for name in _EULER))
+    return _streams(times_s, **{BODY_RATES: body_rates_frd(rates, axes),
+                                ATTITUDE: euler_frd(euler, axes)})
+
+
+def _controls(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """uav_fault_msgs/ControlInputs: deflections [rad] and throttle [0, 1]."""
+    names = tuple(CONTROL_FIELDS[name] for name in STREAM_COLUMNS[SURFACES])
+    return _streams(times_s, **{SURFACES: _columns(fields, names)})
+
+
+def _air_data(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """uav_fault_msgs/AirData: true airspeed [m/s]."""
+    return _streams(times_s, **{AIRSPEED: _columns(fields, AIR_DATA_FIELDS[:1])})
+
+
+IMU, RC_OUT, VFR_HUD = "imu", "rc_out", "vfr_hud"
+STATE, CONTROLS, AIR_DATA = "state", "controls", "air_data"
+MEANINGS: Mapping[str, TopicMeaning] = {
+    IMU: TopicMeaning("sensor_msgs/msg/Imu",
+                      tuple(f"{vector}.{axis}" for vector in ("angular_velocity", "orientation")
+                            for axis in ("xyz" if vector == "angular_velocity" else "wxyz")),
+                      (), "FLU", "", _imu),
+    RC_OUT: TopicMeaning("mavros_msgs/msg/RCOut", ("channels",), ("channels",), "FLU", "",
+                         _rc_out),
+    VFR_HUD: TopicMeaning("mavros_msgs/msg/VFR_HUD", ("airspeed",), (), "FLU", "indicated",
+                          _vfr_hud),
+    STATE: TopicMeaning("uav_fault_msgs/msg/AircraftState",
+                        tuple(STATE_FIELDS[name] for name in _RATES + _EULER), (), "FRD", "",
+                        _state),
+    CONTROLS: TopicMeaning("uav_fault_msgs/msg/ControlInputs",
+                           tuple(CONTROL_FIELDS[name] for name in STREAM_COLUMNS[SURFACES]),
+                           (), "FRD", "", _controls),
+    AIR_DATA: TopicMeaning("uav_fault_msgs/msg/AirData", AIR_DATA_FIELDS[:1], (), "FRD", "true",
+                           _air_data),
+}
+# Topic name -> meaning, by default: MAVROS's and the project's own recordings' (sim_node's).
+MAVROS_TOPICS: Mapping[str, str] = {
+    "/mavros/imu/data": IMU, "/mavros/rc/out": RC_OUT, "/mavros/vfr_hud": VFR_HUD}
+PROJECT_TOPICS: Mapping[str, str] = {"/state": STATE, "/controls": CONTROLS, "/air_data": AIR_DATA}
+DEFAULT_TOPICS: Mapping[str, str] = {**MAVROS_TOPICS, **PROJECT_TOPICS}
+
+
+def checked_topics(topics: Mapping[str, str] | None) -> Mapping[str, str]:
+    """The topics to read (topic name -> MEANINGS key), DEFAULT_TOPICS for None; ValueError
+    for an unknown meaning."""
+    topics = DEFAULT_TOPICS if topics is None else topics
+    for topic, meaning in topics.items():
+        if meaning not in MEANINGS:
+            raise ValueError(f"topic {topic}: unknown meaning {meaning!r} (expected one of "
+                             f"{', '.join(MEANINGS)})")
+    return topics
+
+
+def register_mavros_types(typestore: Typestore) -> Typestore:
+    """The type store with MAVROS_DEFINITIONS registered (those it lacks); returned."""
+    for name, definition in MAVROS_DEFINITIONS.items():
+        if name not in typestore.fielddefs:
+            typestore.register(get_types_from_msg(definition, name))
+    return typestore
+
+
+def padded_rows(arrays: list) -> np.ndarray:
+    """Arrays of possibly different lengths (an array field's values, message by message) as
+    rows (n, longest), NaN-padded."""
+    width = max((len(array) for array in arrays), default=0)
+    rows = np.full((len(arrays), width), np.nan)
+    for row, array in zip(rows, arrays, strict=True):
+        row[:len(array)] = array
+    return rows
+
+
+def message_times_s(stamps_ns: np.ndarray, log_times_ns: np.ndarray,
+                    start_ns: int) -> np.ndarray:
+    """Each message's time [s from start_ns]: its header stamp [ns], or where it has none
+    (0: a message without a header, or one never stamped) the time it was logged [ns]."""
+    times_ns = np.where(stamps_ns > 0, stamps_ns, log_times_ns)
+    return (times_ns - start_ns) * 1e-9
+
+
+@dataclass
+class LogStreams:
+    """The streams a log's topics gave, merged: by name, the topic each came from, and the
+    airspeed's source."""
+
+    streams: dict[str, TimedSeries] = field(default_factory=dict)
+    origins: dict[str, str] = field(default_factory=dict)
+    airspeed_source: str = ""
+
+    def add(self, topic: str, meaning: TopicMeaning, streams: Streams) -> None:
+        """The streams of one topic of that meaning; ValueError when another topic gave one
+        of them already."""
+        for name, series in streams.items():
+            if name in self.streams:
+                raise ValueError(f"topics {self.origins[name]} and {topic} both give the "
+                                 f"{name} stream: read one of them (topics argument)")
+            self.streams[name] = series
+            self.origins[name] = topic
+            if name == AIRSPEED:
+                self.airspeed_source = meaning.airspeed_source
