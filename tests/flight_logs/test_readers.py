@@ -1,0 +1,163 @@
+"""Each flight-log reader on the project's own test logs of one simulated flight (the
+aileron-fault scenario, cut to 60 s): what it reads back equals what the simulator gave at
+the written instants, in FRD, with the PWM and the streams' rates as written."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import simulated_logs
+from helpers.simulated_logs import DOTTED, ROSTOPIC, LogTruth
+from rosbags.highlevel import AnyReader
+from uav_fault_estimator.flight_logs.readers import read_log
+from uav_fault_estimator.flight_logs.streams import (
+    AIRSPEED,
+    ATTITUDE,
+    BODY_RATES,
+    OUTPUTS,
+    SURFACES,
+    FlightLog,
+)
+from uav_sim.paths import scenarios_dir
+from uav_sim.scenario import load_scenario
+
+SEED = 17
+FLOAT32_ULP = np.finfo(np.float32).eps  # relative precision of the ULog's and VFR_HUD's floats
+ULOG_TIME_S = 0.5e-6  # ULog timestamps are whole microseconds
+DOTTED_TIME_S = 0.5e-6  # the dotted CSV's log time: float seconds near 1.7e9 s
+
+
+@dataclasses.dataclass(frozen=True)
+class Logs:
+    truth: LogTruth
+    folder: Path
+    bag_start_s: float  # the bag's first log time [s of simulation time]
+
+
+@pytest.fixture(scope="session")
+def logs(tmp_path_factory: pytest.TempPathFactory) -> Logs:
+    """One simulated flight written as every format (about 1 s)."""
+    scenario = dataclasses.replace(load_scenario(scenarios_dir() / "aileron_loss.yaml"),
+                                   duration_s=60.0)
+    truth = simulated_logs.simulate_truth(scenario, SEED)
+    folder = tmp_path_factory.mktemp("flight_logs")
+    simulated_logs.write_ulog(folder / "flight.ulg", truth)
+    bag_start_s = simulated_logs.write_mavros_bag(folder / "flight.bag", truth, SEED)
+    for layout in (ROSTOPIC, DOTTED):
+        simulated_logs.export_csv(folder / "flight.bag", folder / f"csv_{layout}", layout)
+    simulated_logs.write_project_bag(folder / "recording", truth)
+    return Logs(truth, folder, bag_start_s)
+
+
+def assert_stream(log: FlightLog, truth: LogTruth, name: str, start_s: float,
+                  time_tolerance_s: float, value_tolerance: float) -> None:
+    """log's stream equals the truth's at the written instants, counted from start_s [s of
+    simulation time]; angles compared modulo 2 pi (yaw's range is the reader's)."""
+    series, expected = log.streams[name], truth.streams[name]
+    np.testing.assert_allclose(series.times_s, expected.times_s - start_s, rtol=0,
+                               atol=time_tolerance_s)
+    error = series.values - expected.values
+    if name == ATTITUDE:
+        error = np.angle(np.exp(1j * error))
+    np.testing.assert_allclose(error, 0.0, rtol=0, atol=value_tolerance)
+    assert series.median_period_s == pytest.approx(
+        float(np.median(np.diff(expected.times_s))), abs=2 * time_tolerance_s)
+
+
+@pytest.mark.timeout(60)
+def test_ulog(logs: Logs) -> None:
+    log = read_log(logs.folder / "flight.ulg")
+    assert (log.format, log.output_unit, log.airspeed_source) == ("ulog", "pwm_us", "true")
+    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS}
+    truth = logs.truth
+    # float32 in the file: rates below 1 rad/s, airspeed below 32 m/s, quaternions of norm 1
+    assert_stream(log, truth, BODY_RATES, 0.0, ULOG_TIME_S, FLOAT32_ULP)
+    assert_stream(log, truth, AIRSPEED, 0.0, ULOG_TIME_S, 32 * FLOAT32_ULP)
+    assert_stream(log, truth, ATTITUDE, 0.0, ULOG_TIME_S, 8 * FLOAT32_ULP)
+    assert_stream(log, truth, OUTPUTS, 0.0, ULOG_TIME_S, 0.0)
+
+
+@pytest.mark.timeout(60)
+def test_mavros_bag_flu_to_frd(logs: Logs) -> None:
+    """The bag holds FLU (q and r negated, ENU attitude); the reader gives FRD. Forced to
+    read it as FRD, q and r come out negated."""
+    bag = logs.folder / "flight.bag"
+    with AnyReader([bag]) as reader:
+        connection = next(c for c in reader.connections if c.topic == "/mavros/imu/data")
+        _, _, raw = next(reader.messages(connections=[connection]))
+        rate = reader.deserialize(raw, connection.msgtype).angular_velocity
+    p, q, r = logs.truth.streams[BODY_RATES].values[0]
+    assert (rate.x, rate.y, rate.z) == (p, -q, -r)
+
+    log = read_log(bag)
+    assert (log.format, log.output_unit, log.airspeed_source) == (
+        "ros1_bag", "pwm_us", "indicated")
+    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS}
+    truth, start_s = logs.truth, logs.bag_start_s
+    assert_stream(log, truth, BODY_RATES, start_s, 1e-9, 0.0)  # float64: exact
+    assert_stream(log, truth, ATTITUDE, start_s, 1e-9, 1e-12)
+    assert_stream(log, truth, AIRSPEED, start_s, 1e-9, 32 * FLOAT32_ULP)  # VFR_HUD: float32
+    assert_stream(log, truth, OUTPUTS, start_s, 1e-9, 0.0)
+
+    as_frd = read_log(bag, axes="FRD").streams[BODY_RATES].values
+    np.testing.assert_array_equal(as_frd, log.streams[BODY_RATES].values * [1, -1, -1])
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("layout", [ROSTOPIC, DOTTED])
+def test_csv_export_equals_the_bag(logs: Logs, layout: str) -> None:
+    """Both CSV layouts (rostopic's `field.`, one stamp column in ns, channels0...; the
+    dotted one, secs/nsecs, time in s, channels as a list) read as the bag does."""
+    log = read_log(logs.folder / f"csv_{layout}")
+    assert (log.format, log.output_unit, log.airspeed_source) == ("csv", "pwm_us", "indicated")
+    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS}
+    time_tolerance_s = 1e-9 if layout == ROSTOPIC else DOTTED_TIME_S
+    truth, start_s = logs.truth, logs.bag_start_s
+    assert_stream(log, truth, BODY_RATES, start_s, time_tolerance_s, 0.0)
+    assert_stream(log, truth, ATTITUDE, start_s, time_tolerance_s, 1e-12)
+    assert_stream(log, truth, AIRSPEED, start_s, time_tolerance_s, 32 * FLOAT32_ULP)
+    assert_stream(log, truth, OUTPUTS, start_s, time_tolerance_s, 0.0)
+
+
+@pytest.mark.timeout(60)
+def test_project_recording(logs: Logs) -> None:
+    """A ROS 2 recording of the project's own topics: rates, attitude, true airspeed and
+    the surfaces in radians (SURFACES), at simulation time from the first message."""
+    log = read_log(logs.folder / "recording")
+    assert (log.format, log.airspeed_source) == ("ros2_bag", "true")
+    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, SURFACES}
+    truth = logs.truth
+    start_s = min(stream.times_s[0] for stream in truth.streams.values())
+    for name in (BODY_RATES, ATTITUDE, AIRSPEED, SURFACES):
+        assert_stream(log, truth, name, start_s, 1e-9, 0.0)
+
+
+@pytest.mark.timeout(60)
+def test_pwm_follows_the_fixture_airframe(logs: Logs) -> None:
+    """The written PWM is the airframe truth's: output 5 the mirror of output 1, trims and
+    throws as fixture_airframe.yaml says."""
+    pwm = logs.truth.streams[OUTPUTS].values
+    surfaces = logs.truth.streams[SURFACES].values
+    np.testing.assert_array_equal(pwm[:, 4], 3000 - pwm[:, 0])
+    aileron = simulated_logs.fixture_airframe()["surfaces"]["aileron"]
+    np.testing.assert_allclose(
+        pwm[:, 0], aileron["trim_us"] + aileron["throw_us"] * surfaces[:, 0]
+        / (aileron["sign"] * aileron["max_deflection_rad"]), atol=0.5)
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("name, content", [
+    ("random.ulg", bytes(range(256)) * 4),
+    ("text.ulg", b"not a log\n"),
+    ("random.bag", bytes(range(256)) * 4),
+    ("notes.txt", b"a flight\n"),
+])
+def test_a_file_that_is_not_a_log(tmp_path: Path, name: str, content: bytes) -> None:
+    path = tmp_path / name
+    path.write_bytes(content)
+    with pytest.raises(ValueError, match=str(path)) as raised:
+        read_log(path)
+    assert "\n" not in str(raised.value)
