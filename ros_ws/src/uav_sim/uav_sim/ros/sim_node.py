@@ -45,6 +45,7 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
+from uav_sim.ros.paced_publishing import PacedPublishers
 from uav_sim.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
@@ -64,13 +65,7 @@ PARAMETERS = {
     "wait_for_subscribers": ParameterSpec(
         "start once state has this many subscriptions and discovery settled", 0, 100),
 }
-ACK_TIMEOUT_S = 10.0
-ACK_POLL_S = 0.1  # wall time per wait for acknowledgements, between checks for SIGINT
-DISCOVERY_SETTLE_S = 0.5  # wall time with unchanged subscription counts before flying
 CLOCK_POLL_S = 0.05  # wall time per wait for /clock when following it
-# Fast mode waits for acknowledgement every this many samples; in between, the reliable
-# keep-all writers hold what is not yet acknowledged, so nothing is lost.
-ACK_EVERY_SAMPLES = 10
 
 
 class SimNode(Node):
@@ -80,16 +75,13 @@ class SimNode(Node):
         super().__init__("sim_node")
         self.parameters = declare_parameters(self, "uav_sim", "sim_node.yaml", PARAMETERS,
                                              self.change_pace)
-        # (wall time [s, monotonic], sim time [s]) that the pacing counts from
-        self.pace_origin: tuple[float, float] | None = None
         scenario_path = self.parameters["scenario"] or str(default_scenario_path())
         self.scenario = load_scenario(scenario_path)
         self.simulation = Simulation(
             self.scenario, sensor_rate_hz=self.parameters["sensor_rate_hz"]
         )
-        self.state_publisher = self.create_publisher(AircraftState, "state", STREAM_QOS)
         self.stream_publishers = [
-            self.state_publisher,
+            self.create_publisher(AircraftState, "state", STREAM_QOS),
             self.create_publisher(ControlInputs, "controls", STREAM_QOS),
             self.create_publisher(WindEstimate, "wind/filtered", STREAM_QOS),
             self.create_publisher(FaultVector, "faults/seeded", STREAM_QOS),
@@ -99,6 +91,7 @@ class SimNode(Node):
         if self.scenario.sensors.air_data:
             self.air_data_publisher = self.create_publisher(AirData, "air_data", STREAM_QOS)
             self.stream_publishers.append(self.air_data_publisher)
+        self.paced = PacedPublishers(self, self.stream_publishers)
         # one /clock per domain: a simulator on use_sim_time follows it (wait_for_clock)
         self.follows_clock = self.get_parameter("use_sim_time").value
         self.clock_publisher = (None if self.follows_clock else
@@ -152,44 +145,10 @@ class SimNode(Node):
         """The node's clock [s]: the domain's /clock when following it."""
         return self.get_clock().now().nanoseconds / NANOSECONDS_PER_SECOND
 
-    def wait_until_delivered(self) -> None:
-        """Block until every subscriber has acknowledged what was published (no loss), in
-        short slices so that SIGINT ends the wait; a subscriber that has not acknowledged
-        within ACK_TIMEOUT_S (it died, and discovery has not dropped it yet) is warned of
-        and not waited for any longer."""
-        deadline = time.monotonic() + ACK_TIMEOUT_S
-        poll = rclpy.duration.Duration(seconds=ACK_POLL_S)
-        for publisher in self.stream_publishers:
-            while rclpy.ok() and not publisher.wait_for_all_acked(poll):
-                if time.monotonic() > deadline:
-                    self.get_logger().warning(
-                        f"{publisher.topic_name}: a subscriber has not acknowledged for "
-                        f"{ACK_TIMEOUT_S:g} s; going on without waiting for it")
-                    return
-
-    def wait_for_subscribers(self) -> None:
-        """Wait for the wanted subscriptions of `state`, then for discovery to settle.
-
-        A subscriber's other topics may be matched a moment after its `state`: the flight
-        starts once no stream's subscription count has changed for DISCOVERY_SETTLE_S.
-        """
-        wanted = self.parameters["wait_for_subscribers"]
-        if wanted <= 0:
-            return
-        self.get_logger().info(f"waiting for {wanted} subscription(s) of state")
-        while rclpy.ok() and self.state_publisher.get_subscription_count() < wanted:
-            rclpy.spin_once(self, timeout_sec=0.05)
-        counts, settled_at = None, time.monotonic()
-        while rclpy.ok() and time.monotonic() - settled_at < DISCOVERY_SETTLE_S:
-            latest = [publisher.get_subscription_count() for publisher in self.stream_publishers]
-            if latest != counts:
-                counts, settled_at = latest, time.monotonic()
-            rclpy.spin_once(self, timeout_sec=0.05)
-
     def fly(self) -> None:
         """Step and publish until the scenario's end, paced by the real-time factor."""
         started = time.monotonic()
-        self.pace_origin = (started, self.simulation.time_s)
+        self.paced.start(self.simulation.time_s)
         self.publish(self.simulation.sample())
         while rclpy.ok() and not self.simulation.finished:
             if self.follows_clock:
@@ -197,16 +156,10 @@ class SimNode(Node):
             sample = self.simulation.step()
             self.publish(sample)
             rate = 0.0 if self.follows_clock else self.parameters["real_time_factor"]
-            if self.pace_origin is None:  # the factor changed: count from here
-                self.pace_origin = (time.monotonic(), sample.time_s)
-            if rate > 0:
-                wall_s, sim_s = self.pace_origin
-                time.sleep(max(0.0, wall_s + (sample.time_s - sim_s) / rate - time.monotonic()))
-            elif self.simulation.sample_count % ACK_EVERY_SAMPLES == 0:
-                self.wait_until_delivered()
+            self.paced.pace(sample.time_s, self.simulation.sample_count, rate)
             self.report(sample, time.monotonic() - started)
             rclpy.spin_once(self, timeout_sec=0.0)
-        self.wait_until_delivered()
+        self.paced.wait_until_delivered()
         self.get_logger().info(
             f"scenario '{self.scenario.name}' finished at {self.simulation.time_s:g} s of "
             f"simulation time after {time.monotonic() - started:.1f} s of wall time"
@@ -214,7 +167,7 @@ class SimNode(Node):
 
     def change_pace(self, changes: dict[str, Any]) -> None:
         """A new real-time factor, counted from the next step on."""
-        self.pace_origin = None
+        self.paced.restart()
         self.get_logger().info(f"real-time factor {changes['real_time_factor']:g}")
 
     def report(self, sample: Sample, wall_s: float) -> None:
@@ -235,7 +188,7 @@ class SimNode(Node):
 
 
 def fly(node: SimNode) -> None:
-    node.wait_for_subscribers()
+    node.paced.wait_for_subscribers(node.parameters["wait_for_subscribers"])
     node.fly()
 
 
