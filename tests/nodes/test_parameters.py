@@ -16,6 +16,7 @@ from ros_processes import ros2_run_argv
 from uav_fault_estimator.nodes import (
     detector_node,
     foxglove_node,
+    log_replay_node,
     mhe_node,
     recorder_node,
     residual_node,
@@ -36,6 +37,8 @@ NODES = {  # name: (package, config file, PARAMETERS)
     "detector_node": ("uav_fault_estimator", "detector_node.yaml", detector_node.PARAMETERS),
     "recorder_node": ("uav_fault_estimator", "recorder_node.yaml", recorder_node.PARAMETERS),
     "foxglove_node": ("uav_fault_estimator", "foxglove_node.yaml", foxglove_node.PARAMETERS),
+    "log_replay_node": ("uav_fault_estimator", "log_replay_node.yaml",
+                        log_replay_node.PARAMETERS),
 }
 NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE, Parameter.Type.INTEGER_ARRAY,
            Parameter.Type.DOUBLE_ARRAY)
@@ -194,6 +197,10 @@ CASES = {
         "uav_fault_estimator", "detector_node", ["-p", "false_alarm_probability:=.nan"],
         "detector_node: parameter false_alarm_probability: nan is out of range; it must be a "
         "real number in [1e-09, 0.5]"),
+    "sample_period_zero": (
+        "uav_fault_estimator", "log_replay_node", ["-p", "sample_period_s:=0.0"],
+        "log_replay_node: parameter sample_period_s: 0.0 is out of range; it must be a real "
+        "number in [0.01, 10]"),
     "discovery_period_of_the_wrong_type": (
         "uav_fault_estimator", "recorder_node", ["-p", "discovery_period_s:=[1.0]"],
         "recorder_node: parameter discovery_period_s: [1.0] is a real list; it must be a real "

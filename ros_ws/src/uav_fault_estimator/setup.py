@@ -31,6 +31,7 @@ setup(
             f"recorder_node = {PACKAGE}.nodes.recorder_node:main",
             f"detector_node = {PACKAGE}.nodes.detector_node:main",
             f"foxglove_node = {PACKAGE}.nodes.foxglove_node:main",
+            f"log_replay_node = {PACKAGE}.nodes.log_replay_node:main",
         ],
     },
 )
