@@ -1,7 +1,7 @@
-"""log_replay_node as a process: a simulated aileron-fault flight written as a PX4 ULog
-(PWM outputs at 2.9 Hz, rates at 10 Hz, jittered), replayed as fast as detector_node keeps
-up, gives the alarms the core's offline run of the same log gives; a bad log or airframe is
-one line and status 2."""
+"""log_replay_node as a process: a simulated aileron-fault flight written as a PX4 ULog and as
+a ROS 1 MAVROS bag (PWM outputs at 2.9 Hz, rates at 10 Hz, jittered; FLU in the bag),
+replayed as fast as detector_node keeps up, gives the alarms the core's offline run of the
+same log gives; a bad log or airframe is one line and status 2."""
 
 from __future__ import annotations
 
@@ -32,16 +32,25 @@ SEED = 17
 
 
 @pytest.fixture(scope="module")
-def aileron_fault_ulog(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def aileron_fault_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, float]]:
     """The aileron-loss scenario, cut to DURATION_S with its fault at FAULT_START_S, as a
-    PX4 ULog with the fixture airframe's PWM outputs (about 1 s)."""
+    PX4 ULog and a MAVROS bag with the fixture airframe's PWM outputs (about 1 s): by
+    suffix, the file and its first log time [s of simulation time]."""
     scenario = load_scenario(scenarios_dir() / "aileron_loss.yaml")
     (fault,) = scenario.faults
     scenario = dataclasses.replace(scenario, duration_s=DURATION_S, faults=(
         dataclasses.replace(fault, start_s=FAULT_START_S),))
-    path = tmp_path_factory.mktemp("replay") / "aileron_fault.ulg"
-    simulated_logs.write_ulog(path, simulated_logs.simulate_truth(scenario, SEED))
-    return path
+    truth = simulated_logs.simulate_truth(scenario, SEED)
+    folder = tmp_path_factory.mktemp("replay")
+    simulated_logs.write_ulog(folder / "aileron_fault.ulg", truth)
+    bag_start_s = simulated_logs.write_mavros_bag(folder / "aileron_fault.bag", truth, SEED)
+    return {"ulg": (folder / "aileron_fault.ulg", 0.0),
+            "bag": (folder / "aileron_fault.bag", bag_start_s)}
+
+
+@pytest.fixture
+def aileron_fault_ulog(aileron_fault_logs) -> Path:
+    return aileron_fault_logs["ulg"][0]
 
 
 def replay_argv(log: Path, airframe: Path | None, *extra: str) -> list[str]:
@@ -52,18 +61,20 @@ def replay_argv(log: Path, airframe: Path | None, *extra: str) -> list[str]:
 
 
 @pytest.mark.timeout(60)
-def test_detector_node_on_a_replayed_ulog_gives_the_offline_alarms(
-        aileron_fault_ulog, graph, start_process):
+@pytest.mark.parametrize("suffix", ["ulg", "bag"])
+def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
+        suffix, aileron_fault_logs, graph, start_process):
+    log, start_s = aileron_fault_logs[suffix]
     topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/air_data": AirData}, STREAM_QOS)
     alarms, air_data = topics["/faults/alarm"], topics["/air_data"]
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
     assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
-    replay = start_process(replay_argv(aileron_fault_ulog, FIXTURE_AIRFRAME,
+    replay = start_process(replay_argv(log, FIXTURE_AIRFRAME,
                                        "-p", "real_time_factor:=0",
                                        "-p", "wait_for_subscribers:=1"), "log_replay_node")
     assert replay.wait(timeout_s=40) == 0, replay.output()
 
-    inputs = detector_samples(read_log(aileron_fault_ulog), load_airframe(FIXTURE_AIRFRAME), 0.2)
+    inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
     offline = run_detector(load_calibration("", 25, 0.995), inputs.flight, 0.01)
     graph.spin(20.0, until=lambda: len(alarms) >= len(offline)
                and len(air_data) >= inputs.times_s.size)
@@ -86,13 +97,13 @@ def test_detector_node_on_a_replayed_ulog_gives_the_offline_alarms(
     output = replay.output()
     assert output.count("stream outputs is slower than the detector's grid") == 1, output
     combined = [m for m in alarms if m.combined_alarm]
-    print(f"{inputs.times_s.size} grid samples replayed, {len(alarms)} alarm messages "
+    print(f"{log.name}: {inputs.times_s.size} grid samples replayed, {len(alarms)} alarm messages "
           f"(offline {len(offline)}); GLRT alarms {np.sum([m.alarm for m in alarms], axis=0)}, "
           f"parameter alarms {sum(m.parameter_alarm for m in alarms)}, combined "
           f"{len(combined)}, the first at "
           f"{stamp_seconds(combined[0].header.stamp) if combined else float('nan'):.1f} s "
-          f"(fault at {FAULT_START_S:g} s)")
-    assert combined and stamp_seconds(combined[0].header.stamp) >= FAULT_START_S
+          f"(fault at {FAULT_START_S - start_s:g} s of log time)")
+    assert combined and stamp_seconds(combined[0].header.stamp) >= FAULT_START_S - start_s
 
 
 @pytest.mark.timeout(60)
