@@ -225,7 +225,10 @@ def test_a_gap_in_the_rates_skips_those_detector_samples_only():
     detector = SelfTuningDetector(load_calibration("", window=25, forgetting_factor=0.995),
                                   false_alarm_probability=0.01)
     made = [detector.update(*sample) for sample in zip(*inputs.flight, strict=True)]
-    assert [sample is None for sample in made[1:]] == list(rate_missing[1:])
+    # and the first sample after the gap: its r[k-1] fell in the gap (the yaw model's input)
+    after_gap = np.concatenate([[False], rate_missing[:-1]]) & ~rate_missing
+    assert after_gap.sum() == 1
+    assert [sample is None for sample in made[1:]] == list((rate_missing | after_gap)[1:])
 
 
 @pytest.mark.timeout(10)

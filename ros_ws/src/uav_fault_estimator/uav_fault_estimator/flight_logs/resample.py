@@ -31,6 +31,7 @@ import numpy as np
 from uav_sim.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_sim.sample_grid import GRID_TOLERANCE_S
 
+from uav_fault_estimator.detection.self_tuning import DetectorFlight
 from uav_fault_estimator.flight_logs.airframe import (
     Airframe,
     mixed_output_mismatches,
@@ -143,9 +144,9 @@ class DetectorInputs:
     warnings: tuple[str, ...]
 
     @property
-    def flight(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(times_s, state, controls): what self_tuning.run_detector and calibrate take."""
-        return self.times_s, self.state, self.controls
+    def flight(self) -> DetectorFlight:
+        """What self_tuning.run_detector and calibrate take."""
+        return DetectorFlight(self.times_s, self.state, self.controls, self.airspeed_mps)
 
 
 def _surfaces(log: FlightLog, airframe: Airframe | None) -> tuple[str, TimedSeries]:

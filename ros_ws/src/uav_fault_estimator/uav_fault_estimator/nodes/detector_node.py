@@ -1,6 +1,7 @@
 """detector_node: fast control-surface fault alarms from self-tuning residual generators.
 
-Subscribes `state` and `controls` (matched by stamp); on the calibration's sample grid
+Subscribes `state` and `controls` (matched by stamp) and `air_data` where it comes (its
+airspeed, for a calibration scheduled on airspeed); on the calibration's sample grid
 (every 0.2 s of sim time) runs the three RLS residual generators, their GLRT and the
 parameter-deviation test (self_tuning.py; Blanke & Hansen) and publishes `faults/alarm`
 (FaultAlarm, stamped like the sample), and `/diagnostics`.
@@ -8,13 +9,20 @@ parameter-deviation test (self_tuning.py; Blanke & Hansen) and publishes `faults
 
 from __future__ import annotations
 
+import math
 import sys
 from typing import Any
 
 from rclpy.node import Node
-from uav_fault_msgs.msg import AircraftState, ControlInputs, FaultAlarm
-from uav_sim.envelope import CONTROL_LIMITS, STATE_LIMITS
-from uav_sim.ros.messages import BODY_FRAME, controls_array, header, state_array
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultAlarm
+from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS
+from uav_sim.ros.messages import (
+    BODY_FRAME,
+    air_data_array,
+    controls_array,
+    header,
+    state_array,
+)
 from uav_sim.ros.node_tools import (
     ERROR,
     OK,
@@ -37,6 +45,7 @@ from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 PARAMETERS = {
     "calibration_file": ParameterSpec("detector calibration YAML; empty: the package's "
                                       "config/detector_calibration.yaml"),
+    "airframe": ParameterSpec("the airframe flown: the calibration must be of it"),
     "window": ParameterSpec("M: GLRT window [samples]; must be the calibration's", 2, 1000),
     # below 0.5 the RLS remembers about two samples: nothing left to identify
     "forgetting_factor": ParameterSpec("lambda_f of the RLS; must be the calibration's",
@@ -48,6 +57,8 @@ PARAMETERS = {
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),
            "state": (AircraftState, state_array, STATE_LIMITS)}
+OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS)}
+_AIRSPEED = 0  # air_data_array's index of the true airspeed
 
 
 class DetectorNode(Node):
@@ -58,11 +69,12 @@ class DetectorNode(Node):
         p = declare_parameters(self, "uav_fault_estimator", "detector_node.yaml", PARAMETERS,
                                self.retune)
         calibration = load_calibration(p["calibration_file"], p["window"],
-                                       p["forgetting_factor"])
+                                       p["forgetting_factor"], p["airframe"])
         self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
         self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", STREAM_QOS)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,
-                                      "generators reset to the calibration")
+                                      "generators reset to the calibration",
+                                      optional=OPTIONAL_STREAMS)
         self.diagnostics = Diagnostics(self)
         self.counts = {"published": 0, "combined_alarms": 0}
 
@@ -73,7 +85,9 @@ class DetectorNode(Node):
 
     def process(self, time_s: float, payloads: dict) -> None:
         skipped = self.detector.skipped_samples
-        sample = self.detector.update(time_s, payloads["state"], payloads["controls"])
+        air_data = payloads.get("air_data")
+        sample = self.detector.update(time_s, payloads["state"], payloads["controls"],
+                                      math.nan if air_data is None else air_data[_AIRSPEED])
         if sample is None:  # off the grid, or skipped
             if self.detector.skipped_samples > skipped:
                 self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
