@@ -30,19 +30,21 @@ from uav_fault_estimator.analysis.offline import (
     write_calibration,
 )
 from uav_fault_estimator.analysis.recording import flight_from_recording, project_typestore
-from uav_fault_estimator.detection.self_tuning import calibrate
+from uav_fault_estimator.detection.self_tuning import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_SETTLE_S,
+    calibrate,
+)
 from uav_sim.paths import default_parameters
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
 FIRST_SEED = 101
-SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz
-SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
 
 
 def simulated(count: int) -> tuple[list, str]:
     """count fault-free flights flown now, and the calibration file's header saying which."""
     scenarios = fault_free_flights(count, FIRST_SEED)
-    flights = [flight[:3] for flight in fly_on_grid_each(scenarios, SAMPLE_PERIOD_S)]
+    flights = [flight[:3] for flight in fly_on_grid_each(scenarios, DEFAULT_SAMPLE_PERIOD_S)]
     header = (f"# Written by scripts/calibrate_detector.py: {len(scenarios)} fault-free flights "
               f"of\n# {describe_flights(scenarios)}.\n")
     return flights, header
@@ -51,7 +53,7 @@ def simulated(count: int) -> tuple[list, str]:
 def recorded(bags: list[Path]) -> tuple[list, str]:
     """The flights of recordings, and the calibration file's header naming them."""
     typestore = project_typestore()
-    flights = [flight_from_recording(bag, typestore, SAMPLE_PERIOD_S) for bag in bags]
+    flights = [flight_from_recording(bag, typestore, DEFAULT_SAMPLE_PERIOD_S) for bag in bags]
     header = ("# Written by scripts/calibrate_detector.py from the recordings "
               + ", ".join(str(bag) for bag in bags) + ".\n")
     return flights, header
@@ -69,8 +71,8 @@ def main() -> int:
     try:
         flights, header = (recorded(arguments.bags) if arguments.bags
                            else simulated(arguments.flights))
-        calibration = calibrate(flights, SAMPLE_PERIOD_S, node["forgetting_factor"],
-                                node["window"], SETTLE_S)
+        calibration = calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
+                                node["window"], DEFAULT_SETTLE_S)
     except (ValueError, FileNotFoundError) as error:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)
         return 1

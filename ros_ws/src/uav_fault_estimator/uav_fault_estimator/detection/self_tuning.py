@@ -55,6 +55,8 @@ PARAMETER_NAMES = {
 }
 _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
 _AILERON, _ELEVATOR = (CONTROL_CHANNELS.index(name) for name in ("aileron", "elevator"))
+DEFAULT_SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz: the grid of every calibration made here
+DEFAULT_SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
 # The airframe of the shipped calibration: the simulated Aerosonde
 # (config/airframes/aerosonde_sim.yaml); a calibration holds for its airframe only.
 SIMULATED_AIRFRAME = "aerosonde_sim"
