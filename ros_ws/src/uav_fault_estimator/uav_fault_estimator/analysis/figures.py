@@ -21,7 +21,8 @@ RESIDUAL_LABELS = ("x [m/s²]", "y [m/s²]", "z [m/s²]", "roll [rad/s²]", "pit
                    "yaw [rad/s²]")
 
 
-def _save(figure: plt.Figure, path: Path) -> Path:
+def save_figure(figure: plt.Figure, path: Path) -> Path:
+    """Write figure to path as every figure of the project is (PNG, 110 dpi) and close it."""
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     plt.close(figure)
@@ -78,7 +79,7 @@ def _states_figure(state: list, path: Path) -> Path:
     axes[2].set_ylabel("attitude [deg]")
     axes[2].legend()
     axes[2].set_xlabel("simulation time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def _track_figure(state: list, path: Path) -> Path:
@@ -92,7 +93,7 @@ def _track_figure(state: list, path: Path) -> Path:
     axis.set_ylabel("north [m]")
     axis.set_aspect("equal")
     axis.set_title("ground track from the start")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def _residuals_figure(residuals: list, path: Path) -> Path:
@@ -104,7 +105,7 @@ def _residuals_figure(residuals: list, path: Path) -> Path:
         axis.plot(times, values[:, row])
         axis.set_ylabel(RESIDUAL_LABELS[row], fontsize=8)
     axes[-1].set_xlabel("simulation time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def _sensitivity_figure(residuals: list, path: Path) -> Path:
@@ -119,7 +120,7 @@ def _sensitivity_figure(residuals: list, path: Path) -> Path:
         axis.set_ylabel(RESIDUAL_LABELS[row].replace("]", " per %]"), fontsize=8)
     axes[0].set_title(f"sensitivity column: {names[0]}")
     axes[-1].set_xlabel("simulation time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def _estimates_figure(estimates: list, seeded: list, alarms: list, path: Path) -> Path:
@@ -139,7 +140,7 @@ def _estimates_figure(estimates: list, seeded: list, alarms: list, path: Path) -
         axis.set_ylabel(f"{name} [%]", fontsize=8)
         axis.legend(fontsize=8)
     np.atleast_1d(axes)[-1].set_xlabel("simulation time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def _wind_triangle(state: list, air_data: list) -> tuple[np.ndarray, np.ndarray]:
@@ -177,15 +178,21 @@ def _wind_figure(data: dict[str, list], path: Path) -> Path:
         axis.set_ylabel(f"wind {component} [m/s]")
     axes[0].legend(fontsize=8, loc="upper right")
     axes[-1].set_xlabel("simulation time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
+
+
+def shade_alarms(axis: plt.Axes, spans_s: list[tuple[float, float]],
+                 label: str = "combined alarm") -> None:
+    """Shade each (start, end) span [s] of an alarm, labelled once."""
+    for k, (start_s, end_s) in enumerate(spans_s):
+        axis.axvspan(start_s, end_s, color=ALARM_COLOR, alpha=0.3,
+                     label=label if k == 0 else None)
 
 
 def _mark_alarms(axis: plt.Axes, alarms: list, label: str = "combined alarm") -> None:
     """Shade the samples at which detector_node's combined alarm was raised."""
     raised = [stamp_seconds(m.header.stamp) for m in alarms if m.combined_alarm]
-    for k, time_s in enumerate(raised):
-        axis.axvspan(time_s - 0.1, time_s + 0.1, color=ALARM_COLOR, alpha=0.3,
-                     label=label if k == 0 else None)
+    shade_alarms(axis, [(time_s - 0.1, time_s + 0.1) for time_s in raised], label)
 
 
 def _alarms_figure(alarms: list, seeded: list, path: Path) -> Path:
@@ -213,7 +220,7 @@ def _alarms_figure(alarms: list, seeded: list, path: Path) -> Path:
     axes[0].set_title(f"detector_node: designed P_FA {alarms[0].false_alarm_probability:g} "
                       "per sample and test")
     axes[-1].set_xlabel("simulation time [s]")
-    return _save(figure, path)
+    return save_figure(figure, path)
 
 
 def _first_fault_start(seeded: list) -> float | None:
