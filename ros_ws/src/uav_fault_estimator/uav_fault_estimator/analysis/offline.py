@@ -12,17 +12,18 @@ import multiprocessing
 import os
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import yaml
-from uav_sim.channels import FAULT_NAMES
+from uav_sim.channels import AIR_DATA_CHANNELS, FAULT_NAMES
 from uav_sim.paths import default_parameters
 from uav_sim.sample_grid import on_grid
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
 from uav_fault_estimator.analysis.metrics import EstimateSeries, SeededSeries
+from uav_fault_estimator.detection.self_tuning import DetectorFlight
 from uav_fault_estimator.estimation.estimator_config import (
     config_from_parameters,
     noise_calibration,
@@ -32,6 +33,7 @@ from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 
 PACKAGE = "uav_fault_estimator"
+_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
 def fly_and_estimate(
@@ -86,10 +88,26 @@ def fly_and_estimate(
     )
 
 
-def fly_on_grid(scenario: Scenario, period_s: float) -> tuple[np.ndarray, ...]:
+class GridFlight(NamedTuple):
+    """A simulated flight every period_s: times_s (K,) [s], states (K, 14), controls (K, 7),
+    seeded faults (K, 7) [%], in uav_sim.channels order, and the measured true airspeed
+    (K,) [m/s] (NaN without air data)."""
+
+    times_s: np.ndarray
+    states: np.ndarray
+    controls: np.ndarray
+    seeded_pct: np.ndarray
+    airspeed_mps: np.ndarray
+
+    @property
+    def detector_flight(self) -> DetectorFlight:
+        """What the detector takes of it."""
+        return DetectorFlight(self.times_s, self.states, self.controls, self.airspeed_mps)
+
+
+def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
     """The scenario's samples every period_s [s] of simulation time (a multiple of the
-    sensor period): times (K,) [s], states (K, 14), controls (K, 7), seeded faults (K, 7) [%],
-    in uav_sim.channels order."""
+    sensor period)."""
     simulation = Simulation(scenario)
     every = round(period_s / simulation.period_s)
     if every < 1 or not on_grid(period_s, simulation.period_s):
@@ -100,9 +118,11 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> tuple[np.ndarray, ...]:
         sample = simulation.step()
         if simulation.sample_count % every == 0:
             samples.append(sample)
-    return (np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
-            np.array([s.controls for s in samples]),
-            np.array([s.seeded_faults_pct for s in samples]))
+    return GridFlight(np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
+                      np.array([s.controls for s in samples]),
+                      np.array([s.seeded_faults_pct for s in samples]),
+                      np.array([math.nan if s.air_data is None else s.air_data[_AIRSPEED]
+                                for s in samples]))
 
 
 def fly_on_grid_each(scenarios: Sequence[Scenario],

@@ -1,0 +1,61 @@
+"""The detector's airspeed schedule, measured on simulated flights (issue 17): fault-free
+flights at several airspeeds calibrate it, with and without the schedule; flights at
+airspeeds the calibration did not see give each test's false-alarm rate, and a seeded
+aileron loss its detection delay. Shared by scripts/airspeed_schedule_study.py and
+tests/detector/test_airspeed_schedule.py. No ROS here."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+
+import numpy as np
+from uav_sim.scenario import Scenario
+
+from uav_fault_estimator.analysis.offline import fault_free_flights
+from uav_fault_estimator.detection.self_tuning import (
+    CHANNELS,
+    Calibration,
+    DetectorFlight,
+    run_detector,
+)
+
+# The tests whose rates are measured, in the order of rates()' values.
+TESTS = (*(f"glrt_{name}" for name in CHANNELS), "parameters", "combined")
+
+
+def at_airspeed(scenario: Scenario, airspeed_mps: float) -> Scenario:
+    """The scenario flown at another airspeed [m/s] (the autopilot holds the initial one)."""
+    initial = dataclasses.replace(scenario.initial, airspeed_mps=airspeed_mps)
+    return dataclasses.replace(scenario, initial=initial,
+                               name=f"{scenario.name}_{airspeed_mps:g}mps")
+
+
+def fault_free_at(airspeeds_mps: Sequence[float], per_airspeed: int,
+                  first_seed: int) -> list[Scenario]:
+    """per_airspeed fault-free flights (offline.fault_free_flights: other seeds and winds)
+    at each airspeed [m/s]; seeds from first_seed, none twice."""
+    return [at_airspeed(scenario, airspeed)
+            for k, airspeed in enumerate(airspeeds_mps)
+            for scenario in fault_free_flights(per_airspeed, first_seed + per_airspeed * k,
+                                               first_direction_deg=17.0 * k)]
+
+
+def rates(calibration: Calibration, flight: DetectorFlight,
+          false_alarm_probability: float) -> dict[str, float]:
+    """Share of the flight's samples with every test running (RLS settled, GLRT window
+    full) on which each test (TESTS) alarms."""
+    samples = [sample for sample in run_detector(calibration, flight, false_alarm_probability)
+               if np.isfinite(sample.statistic).all()]
+    glrt = np.array([sample.alarm for sample in samples]).mean(axis=0)
+    return {**{f"glrt_{name}": float(rate) for name, rate in zip(CHANNELS, glrt, strict=True)},
+            "parameters": float(np.mean([sample.parameter_alarm for sample in samples])),
+            "combined": float(np.mean([sample.combined_alarm for sample in samples]))}
+
+
+def first_combined_alarm_s(calibration: Calibration, flight: DetectorFlight,
+                           false_alarm_probability: float, after_s: float) -> float | None:
+    """Time of the first combined alarm at or after after_s [s]; None if there is none."""
+    return next((sample.time_s for sample in
+                 run_detector(calibration, flight, false_alarm_probability)
+                 if sample.combined_alarm and sample.time_s >= after_s), None)
