@@ -12,7 +12,7 @@ import pytest
 from helpers import simulated_logs
 from helpers.simulated_logs import DOTTED, ROSTOPIC, LogTruth
 from rosbags.highlevel import AnyReader
-from uav_fault_estimator.flight_logs.readers import read_log
+from uav_fault_estimator.flight_logs.readers import log_paths, read_log
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
@@ -160,4 +160,27 @@ def test_a_file_that_is_not_a_log(tmp_path: Path, name: str, content: bytes) -> 
     path.write_bytes(content)
     with pytest.raises(ValueError, match=str(path)) as raised:
         read_log(path)
+    assert "\n" not in str(raised.value)
+
+
+@pytest.mark.timeout(30)
+def test_log_paths_expand_folders_one_level(tmp_path: Path) -> None:
+    """A log given stays; another folder stands for the logs directly in it, in name order
+    (not deeper, not other files); a path that is no log stays for read_log to refuse; a
+    folder without logs is one line."""
+    (tmp_path / "b.ulg").write_bytes(b"")
+    (tmp_path / "a.bag").write_bytes(b"")
+    (tmp_path / "notes.txt").write_text("a flight\n")
+    (tmp_path / "rosbag2").mkdir()
+    (tmp_path / "rosbag2" / "metadata.yaml").write_text("")
+    (tmp_path / "csv").mkdir()
+    (tmp_path / "csv" / "imu.csv").write_text("")
+    (tmp_path / "deeper" / "day").mkdir(parents=True)
+    (tmp_path / "deeper" / "day" / "c.ulg").write_bytes(b"")
+    missing = tmp_path / "missing.ulg"
+    assert log_paths([tmp_path, tmp_path / "csv", missing]) == [
+        tmp_path / name for name in ("a.bag", "b.ulg", "csv", "rosbag2", "csv")] + [missing]
+    assert log_paths([tmp_path / "deeper" / "day"]) == [tmp_path / "deeper" / "day" / "c.ulg"]
+    with pytest.raises(ValueError, match="no flight log in this folder") as raised:
+        log_paths([tmp_path / "deeper"])
     assert "\n" not in str(raised.value)
