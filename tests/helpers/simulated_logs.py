@@ -28,6 +28,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.typesys import Stores, get_typestore
 from uav_fault_estimator.analysis.recording import Recording, project_typestore
+from uav_fault_estimator.detection.self_tuning import DEFAULT_SAMPLE_PERIOD_S, DetectorFlight
 from uav_fault_estimator.flight_logs.axes import body_rates_frd, quaternions_from_euler
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
@@ -83,9 +84,11 @@ class TruthStream:
 
 @dataclass(frozen=True)
 class LogTruth:
-    """The simulated flight's streams as the logs hold them, by stream name."""
+    """The simulated flight's streams as the logs hold them, by stream name; and grid: the
+    same flight sampled directly on the detector's grid (the run a log is compared with)."""
 
     streams: Mapping[str, TruthStream]
+    grid: DetectorFlight
 
 
 def simulate_truth(scenario: Scenario, seed: int) -> LogTruth:
@@ -110,9 +113,12 @@ def simulate_truth(scenario: Scenario, seed: int) -> LogTruth:
         OUTPUTS: pwm_outputs(controls),
         SURFACES: controls[:, [CONTROL_CHANNELS.index(c) for c in STREAM_COLUMNS[SURFACES]]],
     }
+    every = round(DEFAULT_SAMPLE_PERIOD_S * SENSOR_RATE_HZ)
+    grid = DetectorFlight(times_s[::every], states[::every], controls[::every],
+                          airspeed[::every])
     return LogTruth({name: TruthStream(times_s[picks[STREAM_TIMING[name]]],
                                        value[picks[STREAM_TIMING[name]]])
-                     for name, value in values.items()})
+                     for name, value in values.items()}, grid)
 
 
 def _instants(timing: StreamTiming, count: int, rng: np.random.Generator) -> np.ndarray:

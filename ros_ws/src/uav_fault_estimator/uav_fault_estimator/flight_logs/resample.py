@@ -7,13 +7,18 @@ the stream's two neighbouring samples, the last at or before t and the first at 
 (a sample within uav_sim.sample_grid.GRID_TOLERANCE_S of t counts as at t: stamps rounded to
 the microsecond), and:
 
-- continuous signals (body rates, attitude, airspeed) are interpolated linearly between
-  them: these signals are smooth on the scale of the sample intervals, linear interpolation
-  is exact on a ramp, and it adds no overshoot or values the aircraft never had (as splines
-  can). Angles go the short way round and stay in (-pi, pi] (yaw crosses +-pi).
-- actuator commands (surfaces, throttle) are held from the last sample (zero-order hold):
-  an autopilot's output is piecewise constant between its updates, so the value in force at
-  t is the last one sent, and interpolating would invent a command sent earlier than it was.
+- every stream is interpolated linearly between them: body rates, attitude and airspeed
+  are smooth on the scale of the sample intervals, linear interpolation is exact on a ramp,
+  and it adds no overshoot or values the aircraft never had (as splines can). Angles go the
+  short way round and stay in (-pi, pi] (yaw crosses +-pi).
+- actuator commands (surfaces, throttle) too: an autopilot's output is piecewise constant
+  only at its own rate (50-400 Hz); a log that keeps it at 3-10 Hz holds samples of a
+  command that moves smoothly between them, and holding the last sample (zero-order hold)
+  lags it by half a log period on average. Measured on the aileron loss written as a ULog
+  and a MAVROS bag (outputs at 2.9 Hz; 5 seeds, 2 onsets, both formats): the first combined
+  alarm came 0.05 s before the direct run's on average, within one 0.2 s sample in 18 of 20
+  (at most 0.4 s off) interpolated, against 0.93 s before on average, within one sample in
+  11 of 20 and up to 7.8 s off held. HOLD stays available to `resample`.
 
 A grid point is missing (NaN), not invented, when it lies before a stream's first or after
 its last sample (nothing is extrapolated) or when its neighbouring samples are further
@@ -189,7 +194,7 @@ def detector_samples(log: FlightLog, airframe: Airframe | None,
     controls = np.full((times_s.size, len(CONTROL_CHANNELS)), np.nan)
     airspeed_mps = np.full(times_s.size, np.nan)
     _fill(state, STATE_CHANNELS, rates.columns, resample(rates, times_s, LINEAR))
-    _fill(controls, CONTROL_CHANNELS, surfaces.columns, resample(surfaces, times_s, HOLD))
+    _fill(controls, CONTROL_CHANNELS, surfaces.columns, resample(surfaces, times_s, LINEAR))
     if ATTITUDE in log.streams:
         attitude = log.streams[ATTITUDE]
         _fill(state, STATE_CHANNELS, attitude.columns, resample(attitude, times_s, ANGULAR))
