@@ -18,7 +18,7 @@ from uav_fault_estimator.detection.self_tuning import load_calibration, run_dete
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
-from uav_fault_msgs.msg import AirData, FaultAlarm
+from uav_fault_msgs.msg import AircraftState, AirData, FaultAlarm
 from uav_sim.paths import scenarios_dir
 from uav_sim.ros.messages import air_data_array, stamp_seconds
 from uav_sim.ros.node_tools import STREAM_QOS
@@ -65,13 +65,16 @@ def replay_argv(log: Path, airframe: Path | None, *extra: str) -> list[str]:
 def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
         suffix, aileron_fault_logs, graph, start_process):
     log, start_s = aileron_fault_logs[suffix]
-    topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/air_data": AirData}, STREAM_QOS)
+    # this test takes state too, so that the replay waits for it as for detector_node: its
+    # air_data reader is then matched before the first message
+    topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/air_data": AirData,
+                              "/state": AircraftState}, STREAM_QOS)
     alarms, air_data = topics["/faults/alarm"], topics["/air_data"]
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
     assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
     replay = start_process(replay_argv(log, FIXTURE_AIRFRAME,
                                        "-p", "real_time_factor:=0",
-                                       "-p", "wait_for_subscribers:=1"), "log_replay_node")
+                                       "-p", "wait_for_subscribers:=2"), "log_replay_node")
     assert replay.wait(timeout_s=40) == 0, replay.output()
 
     inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
