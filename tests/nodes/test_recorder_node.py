@@ -42,10 +42,12 @@ def test_every_stream_message_is_recorded_and_readable(short_scenario, start_pro
         qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
     print(f"recorded: {counts}; /state logged {min(lags_s):.3f} to {max(lags_s):.3f} s "
           f"after its stamp; QoS of /state: {qos['/state']}")
-    # sim time: a sample is logged at the clock of the sample before it (sim_node publishes
-    # /clock after the streams) or of a later one (the fast flight runs up to 10 samples
-    # ahead between acknowledgements; measured up to 0.45 s), never at wall time (1.8e9 s)
-    assert min(lags_s) >= -0.05 - 1e-6 and max(lags_s) <= 1.0
+    # sim time, never wall time (1.8e9 s): a sample is logged at the newest /clock the
+    # recorder has taken, a few samples either side of its stamp: the fast flight runs up to
+    # 10 samples ahead between acknowledgements (measured up to 0.45 s later), and /clock
+    # (newest only) and the queued streams' callbacks interleave (measured up to 0.1 s
+    # earlier in a CI run)
+    assert -0.5 <= min(lags_s) and max(lags_s) <= 1.0
     for topic in STREAMS:  # each with its publisher's profile (DDS does not tell history)
         [profile] = qos[topic]
         assert (profile.reliability.name, profile.durability.name) == ("RELIABLE", "VOLATILE")
