@@ -16,6 +16,7 @@ that cannot be written (one line naming it); 1 the report failed otherwise.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -37,9 +38,13 @@ def write_report(bag: Path, out: Path, scenario: str,
     read or lacks a stream; OSError when OUT cannot be written.
     """
     typestore = project_typestore()
-    # one pass over the recording for the metrics and the figures
+    # one pass over the recording for the metrics and the figures; /diagnostics on its own
+    # (global, and outside the flight's wall span)
     messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS), namespace)
-    metrics = report.run_metrics(report.run_from(messages, bag), scenario)
+    diagnostics = read_topics(bag, typestore, (report.DIAGNOSTICS_TOPIC,))
+    run = dataclasses.replace(report.run_from(messages, bag), cpu_s=report.node_cpu_s(
+        diagnostics[report.DIAGNOSTICS_TOPIC], namespace))
+    metrics = report.run_metrics(run, scenario)
     out.mkdir(parents=True, exist_ok=True)
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")
     return metrics, figures.plot_run(messages, out)

@@ -38,8 +38,10 @@ METRICS_KEYS = {"scenario", "duration_s", "settle_s", "detection_threshold_pct",
                 "false_alarms", "solver", "pipeline", "alarms"}
 FAULT_KEYS = {"seeded", "seeded_final_pct", "estimate_final_pct", "rmse_pct",
               "max_abs_error_pct", "detection_delay_s"}
-SOLVER_KEYS = {"name", "solves", "median_ms", "p99_ms", "max_ms", "failures"}
-PIPELINE_KEYS = {"wall_s", "real_time_factor", "messages_expected", "messages_received"}
+SOLVER_KEYS = {"name", "solves", "median_ms", "p99_ms", "max_ms", "cpu_median_ms", "cpu_p99_ms",
+               "failures"}
+PIPELINE_KEYS = {"wall_s", "real_time_factor", "messages_expected", "messages_received",
+                 "cpu_s_per_sim_s"}
 PROGRESS = re.compile(r"^  t = (\d+) / ", re.MULTILINE)
 
 

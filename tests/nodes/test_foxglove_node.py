@@ -38,7 +38,7 @@ def estimate() -> FaultEstimate:
         names=["right_wing_lift_loss", "left_wing_drag_increase"], values_pct=[9.75, -0.5],
         solver_status=FaultEstimate.STATUS_MAX_ITERATIONS, updated=True, horizon=2,
         horizon_s=0.5, window_values_pct=[9.5, -0.25, 9.75, -0.5], iterations=31,
-        solve_time_ms=0.625)
+        solve_time_ms=0.625, update_cpu_time_ms=0.5)
     message.header.stamp.sec, message.header.stamp.nanosec = 123, 500_000_000
     message.header.frame_id = "base_link_frd"
     return message

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from uav_fault_estimator.analysis.metrics import (
@@ -79,6 +81,10 @@ def test_solver_figures_count_failures_but_not_waiting():
     assert solver["solves"] == 600 - 20 - 1 and solver["failures"] == 1
     assert solver["median_ms"] == pytest.approx(np.median(solved_times), abs=1e-3)
     assert solver["max_ms"] == pytest.approx(1.2, abs=1e-3)
+    assert solver["cpu_median_ms"] is None  # not in the series: a recording without it
+    with_cpu = dataclasses.replace(estimates, cpu_times_ms=estimates.solve_times_ms / 2)
+    assert solver_metrics(with_cpu)["cpu_median_ms"] == pytest.approx(
+        np.median(solved_times) / 2, abs=1e-3)
 
 
 @pytest.mark.timeout(30)

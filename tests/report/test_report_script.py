@@ -41,7 +41,7 @@ def write_bag(path: Path) -> Path:
             names=["right_wing_lift_loss", "left_wing_lift_loss"],
             values_pct=np.array([0.1 * index, 0.0]), solver_status=0, updated=True,
             horizon=10, horizon_s=5.0, window_values_pct=np.zeros(20), iterations=3,
-            solve_time_ms=0.4)
+            solve_time_ms=0.4, update_cpu_time_ms=0.3)
         recording.write("/faults/estimate", 1_000_000 * index,
                         bytes(typestore.serialize_cdr(message, ESTIMATE_TYPE)))
     recording.close()

@@ -25,13 +25,15 @@ DETECTION_THRESHOLD_PCT = 2.0   # metrics.json's detection_threshold_pct [%]
 @dataclass(frozen=True)
 class EstimateSeries:
     """What mhe_node published: stamps (K,) [s], values (K, p) [%], statuses (K,), update
-    times (K,) [ms], and the p fault names."""
+    wall times (K,) [ms], the p fault names, and the updates' CPU times (K,) [ms] (None for
+    a recording made before they were published)."""
 
     names: Sequence[str]
     stamps_s: np.ndarray
     values_pct: np.ndarray
     statuses: np.ndarray
     solve_times_ms: np.ndarray
+    cpu_times_ms: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -98,16 +100,23 @@ def fault_metrics(estimates: EstimateSeries, seeded: SeededSeries, settle_s: flo
 
 
 def solver_metrics(estimates: EstimateSeries) -> dict:
-    """Solves (updates with a solution), their median, p99 and largest time, failures
-    (updates that did not solve, other than waiting for data)."""
+    """Solves (updates with a solution), their median, p99 and largest wall time, the
+    median and p99 of their CPU time (None when not recorded), failures (updates that did
+    not solve, other than waiting for data)."""
     solved = estimates.statuses == SolveStatus.SOLVED
     failed = ~solved & (estimates.statuses != SolveStatus.WAITING)
-    times = estimates.solve_times_ms[solved]
     summary = {"name": "proxsuite", "solves": int(solved.sum()), "failures": int(failed.sum())}
-    for key, value in (("median_ms", np.median), ("p99_ms", lambda t: np.percentile(t, 99)),
-                       ("max_ms", np.max)):
-        summary[key] = round(float(value(times)), 3) if times.size else None
+    cpu = None if estimates.cpu_times_ms is None else estimates.cpu_times_ms[solved]
+    for prefix, times, statistics in (("", estimates.solve_times_ms[solved], _TIME_STATISTICS),
+                                      ("cpu_", cpu, _TIME_STATISTICS[:2])):
+        for key, value in statistics:
+            summary[prefix + key] = (round(float(value(times)), 3)
+                                     if times is not None and times.size else None)
     return summary
+
+
+_TIME_STATISTICS = (("median_ms", np.median), ("p99_ms", lambda t: np.percentile(t, 99)),
+                    ("max_ms", np.max))
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,7 @@ def fly_and_estimate(
     published = list(mhe["fault_names"])
     simulation = Simulation(scenario)
     period_s = float(residual["update_period_s"])
-    stamps, values, statuses, times_ms, seeded = [], [], [], [], []
+    stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
     sample = simulation.sample()
     while True:
         wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
@@ -76,6 +76,7 @@ def fly_and_estimate(
             values.append(estimate.fault_pct[estimate.columns(published)])
             statuses.append(int(estimate.status))
             times_ms.append(estimate.update_time_ms)
+            cpu_ms.append(estimate.update_cpu_ms)
             seeded.append(sample.seeded_faults_pct)
         if simulation.finished:
             break
@@ -83,7 +84,7 @@ def fly_and_estimate(
     stamps_s = np.array(stamps)
     return (
         EstimateSeries(list(mhe["fault_names"]), stamps_s, np.array(values),
-                       np.array(statuses), np.array(times_ms)),
+                       np.array(statuses), np.array(times_ms), np.array(cpu_ms)),
         SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
     )
 

@@ -3,10 +3,12 @@ No ROS here: metrics.py computes the figures."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from uav_sim.health import CPU_KEY, hardware_id
 from uav_sim.paths import default_parameters
 from uav_sim.ros.messages import stamp_seconds
 
@@ -26,6 +28,9 @@ ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
 STATE_TOPIC = "/state"
 ALARM_TOPIC = "/faults/alarm"  # optional: only when detector_node ran
+# Every node's health, CPU time included: read on its own (global, and kept out of the
+# recording's wall span: the nodes report on it before and after the flight)
+DIAGNOSTICS_TOPIC = "/diagnostics"
 TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC, ALARM_TOPIC)
 REQUIRED_TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC)
 
@@ -41,6 +46,7 @@ class Run:
     duration_s: float
     wall_s: float
     alarms: AlarmSeries | None = None
+    cpu_s: Mapping[str, float] | None = None  # each node's CPU time over the run [s]
 
 
 def run_from(messages: dict[str, list], bag: Path) -> Run:
@@ -57,6 +63,7 @@ def run_from(messages: dict[str, list], bag: Path) -> Run:
             values_pct=np.array([m.values_pct for m in estimates]),
             statuses=np.array([m.solver_status for m in estimates]),
             solve_times_ms=np.array([m.solve_time_ms for m in estimates]),
+            cpu_times_ms=np.array([m.update_cpu_time_ms for m in estimates]),
         ),
         seeded=SeededSeries(
             names=list(seeded[0].names),
@@ -84,6 +91,22 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
     )
 
 
+def node_cpu_s(diagnostics: list, namespace: str = "") -> dict[str, float]:
+    """Each node's CPU time over the run [s], by node name, from the CPU times on its
+    /diagnostics statuses (uav_sim.health.CPU_KEY): its last less its first, which leaves
+    out the start-up before the first status (imports, JSBSim's loading), of the nodes in
+    namespace ("" for none; the recorder's and other vehicles' left out)."""
+    wanted, first, last = hardware_id(namespace), {}, {}
+    for array in diagnostics:
+        for status in array.status:
+            values = {item.key: item.value for item in status.values}
+            if status.hardware_id == wanted and CPU_KEY in values:
+                name = status.name.rsplit("/", 1)[-1]
+                first.setdefault(name, float(values[CPU_KEY]))
+                last[name] = float(values[CPU_KEY])
+    return {name: last[name] - first[name] for name in sorted(last)}
+
+
 def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
                 settle_s: float = SETTLE_S,
                 threshold_pct: float = DETECTION_THRESHOLD_PCT) -> dict:
@@ -105,6 +128,8 @@ def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
             "real_time_factor": round(run.duration_s / run.wall_s, 2) if run.wall_s else None,
             "messages_expected": round(run.duration_s / update_period_s),
             "messages_received": len(run.estimates.stamps_s),
+            "cpu_s_per_sim_s": None if not run.cpu_s else {
+                name: round(cpu_s / run.duration_s, 4) for name, cpu_s in run.cpu_s.items()},
         },
         "alarms": alarm_metrics(run.alarms, run.seeded) if run.alarms else None,
     }
@@ -134,10 +159,14 @@ def table(metrics: dict) -> str:
     lines += [
         f"false alarms: {', '.join(metrics['false_alarms']) or 'none'}",
         f"solver: {solver['solves']} solves, {solver['failures']} failures, median "
-        f"{solver['median_ms']} ms, p99 {solver['p99_ms']} ms, max {solver['max_ms']} ms",
+        f"{solver['median_ms']} ms, p99 {solver['p99_ms']} ms, max {solver['max_ms']} ms "
+        f"(wall); CPU median {solver['cpu_median_ms']} ms, p99 {solver['cpu_p99_ms']} ms",
         f"pipeline: {pipeline['messages_received']}/{pipeline['messages_expected']} estimates,"
         f" {pipeline['wall_s']} s wall, real-time factor {pipeline['real_time_factor']}",
     ]
+    if pipeline["cpu_s_per_sim_s"]:
+        lines.append("CPU per simulated second [s]: " + ", ".join(
+            f"{name} {cpu:.3f}" for name, cpu in pipeline["cpu_s_per_sim_s"].items()))
     alarms = metrics.get("alarms")
     if alarms:
         lines.append(f"detector: P_FA {alarms['false_alarm_probability']:g} per sample; "

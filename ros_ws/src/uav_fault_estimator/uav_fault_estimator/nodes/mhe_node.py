@@ -166,6 +166,7 @@ class MheNode(Node):
             window_values_pct=result.window_pct[:, published].ravel().tolist(),  # row-major N x p
             iterations=result.iterations,
             solve_time_ms=result.update_time_ms,
+            update_cpu_time_ms=result.update_cpu_ms,
         )
 
     def count(self, result: EstimateResult) -> None:

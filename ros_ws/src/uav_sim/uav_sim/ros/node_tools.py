@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import rclpy
+import rclpy.duration
 import rclpy.logging
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import (
@@ -30,6 +31,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
+from uav_sim.health import CPU_KEY, hardware_id
 from uav_sim.paths import default_parameters
 
 # Sensor-rate streams and estimates: reliable and keep-all, so that a fast simulation loses
@@ -49,7 +51,6 @@ OK, WARN, ERROR, STALE = (DiagnosticStatus.OK, DiagnosticStatus.WARN, Diagnostic
 # inputs stopped (they arrive at 2-20 Hz of sim time, and the graph runs at or above real
 # time).
 STALE_AFTER_S = 5.0
-AIRCRAFT = "aerosonde"  # the hardware every node diagnoses; its namespace names the vehicle
 
 
 @dataclass(frozen=True)
@@ -203,7 +204,9 @@ def _set_live(parameters: list[Parameter], live: Mapping[str, ParameterSpec],
 
 class Diagnostics:
     """Publishes the node's latest health on /diagnostics once a second of wall time, with
-    the vehicle as hardware_id (`aerosonde`, or `aerosonde/uav1` in namespace /uav1).
+    the vehicle as hardware_id (`aerosonde`, or `aerosonde/uav1` in namespace /uav1) and,
+    beside the node's own values, its process's CPU time so far (CPU_KEY): what the node
+    costs, whatever else shares the cores.
 
     Wall time, not simulation time: health is for the people and tools watching the run.
     A node driven by inputs (stale_after_s given) says STALE, with its last status's values,
@@ -214,10 +217,9 @@ class Diagnostics:
                  stale_after_s: float | None = STALE_AFTER_S) -> None:
         self._node = node
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", DIAGNOSTICS_QOS)
-        namespace = node.get_namespace()
         self._status = DiagnosticStatus(
             level=OK, name=node.get_fully_qualified_name(), message="starting",
-            hardware_id=AIRCRAFT + ("" if namespace == "/" else namespace),
+            hardware_id=hardware_id(node.get_namespace()),
         )
         self._stale_after_s = stale_after_s
         self._updated_s = time.monotonic()
@@ -232,14 +234,21 @@ class Diagnostics:
 
     def publish(self) -> None:
         status, silent_s = self._status, time.monotonic() - self._updated_s
+        level, message = status.level, status.message
         if self._stale_after_s is not None and silent_s > self._stale_after_s:
-            status = DiagnosticStatus(
-                level=STALE, name=status.name, hardware_id=status.hardware_id,
-                message=f"no input for {silent_s:.0f} s (last: {status.message})",
-                values=status.values)
-        array = DiagnosticArray(status=[status])
+            level, message = STALE, f"no input for {silent_s:.0f} s (last: {status.message})"
+        published = DiagnosticStatus(
+            level=level, name=status.name, hardware_id=status.hardware_id, message=message,
+            values=[*status.values, KeyValue(key=CPU_KEY, value=f"{time.process_time():.3f}")])
+        array = DiagnosticArray(status=[published])
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)
+
+    def publish_last(self, timeout_s: float = 1.0) -> None:
+        """Publish now and wait up to timeout_s [s] until the subscribers have it: a node
+        about to end says its last status (its whole CPU time)."""
+        self.publish()
+        self._publisher.wait_for_all_acked(rclpy.duration.Duration(seconds=timeout_s))
 
 
 NodeType = TypeVar("NodeType", bound=Node)

@@ -160,6 +160,7 @@ class SimNode(Node):
             self.report(sample, time.monotonic() - started)
             rclpy.spin_once(self, timeout_sec=0.0)
         self.paced.wait_until_delivered()
+        self.diagnostics.publish_last()  # the flight's whole CPU time, before the node ends
         self.get_logger().info(
             f"scenario '{self.scenario.name}' finished at {self.simulation.time_s:g} s of "
             f"simulation time after {time.monotonic() - started:.1f} s of wall time"
