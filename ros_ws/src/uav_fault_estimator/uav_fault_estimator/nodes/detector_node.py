@@ -130,7 +130,8 @@ class DetectorNode(Node):
         return {**self.counts, "skipped_samples": self.detector.skipped_samples,
                 "implausible_values": self.streams.implausible_values,
                 "stamp_resets": self.streams.restarts, "stray_stamps": self.streams.stray_messages,
-                "dropped_incomplete_samples": self.streams.dropped_sets}
+                "dropped_incomplete_samples": self.streams.dropped_sets,
+                "late_optional_messages": self.streams.late_optional}
 
 
 def main(args: list[str] | None = None) -> int:

@@ -136,6 +136,7 @@ class ResidualNode(Node):
             "stamp_resets": self.streams.restarts,
             "stray_stamps": self.streams.stray_messages,
             "dropped_incomplete_samples": self.streams.dropped_sets,
+            "late_optional_messages": self.streams.late_optional,
             "implausible_values": self.streams.implausible_values,
             "model_rebuilds": self.generator.model_rebuilds,
             "core_ms_per_sample": f"{1e3 * self.core_time_s / max(self.counts['samples'], 1):.3f}",
