@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from helpers.nested import edit
 from uav_fault_estimator.flight_logs.airframe import (
     AirframeError,
     load_airframe,
@@ -47,16 +48,7 @@ def write(tmp_path, data) -> str:
 
 def edited(dotted_key: str, value):
     """PWM_AIRFRAME with one key set (value None: deleted); list items by index."""
-    data = copy.deepcopy(PWM_AIRFRAME)
-    *parents, last = dotted_key.split(".")
-    node = data
-    for key in parents:
-        node = node[int(key)] if isinstance(node, list) else node[key]
-    if value is None:
-        del node[last]
-    else:
-        node[last] = value
-    return data
+    return edit(copy.deepcopy(PWM_AIRFRAME), dotted_key, value)
 
 
 def outputs_log(times_s, columns: dict[str, list[float]], unit: str = "pwm_us") -> FlightLog:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import yaml
 from helpers.flights import fly
+from helpers.nested import edit
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import (
     MAX_SCENARIO_BYTES,
@@ -44,19 +45,6 @@ def test_default_scenario_values(default_data):
     assert scenario.faults_pct(0.0)["right_wing_lift_loss"] == 0.0
     assert scenario.faults_pct(70.0)["right_wing_lift_loss"] == pytest.approx(5.0)
     assert scenario.faults_pct(300.0)["left_wing_drag_increase"] == pytest.approx(25.0)
-
-
-def edit(data, dotted_key, value):
-    """Set (or with value None, delete) a nested key of the scenario data."""
-    *parents, last = dotted_key.split(".")
-    node = data
-    for key in parents:
-        node = node[int(key)] if isinstance(node, list) else node[key]
-    if value is None:
-        del node[last]
-    else:
-        node[last] = value
-    return data
 
 
 @pytest.mark.parametrize(
