@@ -24,13 +24,12 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 from uav_fault_estimator.analysis.airspeed_study import (
     TESTS,
     at_airspeed,
     fault_free_at,
     first_combined_alarm_s,
-    rates,
+    mean_rates,
 )
 from uav_fault_estimator.analysis.offline import fly_on_grid_each
 from uav_fault_estimator.detection.self_tuning import (
@@ -80,9 +79,7 @@ def main() -> int:
         per_airspeed = {}
         for k, airspeed in enumerate(TEST_AIRSPEEDS_MPS):
             flown = test_flights[k * TEST_FLIGHTS_PER_AIRSPEED:(k + 1) * TEST_FLIGHTS_PER_AIRSPEED]
-            measured = [rates(calibration, flight, p_fa) for flight in flown]
-            per_airspeed[f"{airspeed:g}"] = {test: float(np.mean([m[test] for m in measured]))
-                                             for test in TESTS}
+            per_airspeed[f"{airspeed:g}"] = mean_rates(calibration, flown, p_fa)
         delays = {}
         for airspeed, flight in zip(FAULT_AIRSPEEDS_MPS, fault_flights, strict=True):
             alarm_s = first_combined_alarm_s(calibration, flight, p_fa, fault_start_s)

@@ -22,7 +22,7 @@ from uav_fault_estimator.analysis.airspeed_study import (
     at_airspeed,
     fault_free_at,
     first_combined_alarm_s,
-    rates,
+    mean_rates,
 )
 from uav_fault_estimator.analysis.offline import fly_on_grid_each
 from uav_fault_estimator.detection.self_tuning import (
@@ -48,12 +48,6 @@ def calibrated(flights, scheduled: bool) -> Calibration:
                      DEFAULT_SETTLE_S, scheduled=scheduled)
 
 
-def mean_rates(calibration: Calibration, flights) -> dict[str, float]:
-    """Each test's false-alarm rate over the flights (airspeed_study.rates, averaged)."""
-    measured = [rates(calibration, flight, P_FA) for flight in flights]
-    return {test: float(np.mean([m[test] for m in measured])) for test in TESTS}
-
-
 @pytest.fixture(scope="module")
 def flown():
     """Calibration flights (PER_AIRSPEED at each calibration airspeed), fault-free flights
@@ -75,7 +69,7 @@ def test_unseen_airspeeds_stay_within_three_times_the_design_and_faults_come_soo
             "unscheduled": calibrated(calibration_flights, False),
             "scheduled": calibrated(calibration_flights, True)}
     measured = {name: [mean_rates(calibration, unseen[k * UNSEEN_PER_AIRSPEED:
-                                                     (k + 1) * UNSEEN_PER_AIRSPEED])
+                                                     (k + 1) * UNSEEN_PER_AIRSPEED], P_FA)
                        for k in range(len(UNSEEN_AIRSPEEDS_MPS))]
                 for name, calibration in made.items()}
     for name, per_airspeed in measured.items():

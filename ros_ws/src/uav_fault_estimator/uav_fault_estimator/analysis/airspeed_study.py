@@ -53,6 +53,13 @@ def rates(calibration: Calibration, flight: DetectorFlight,
             "combined": float(np.mean([sample.combined_alarm for sample in samples]))}
 
 
+def mean_rates(calibration: Calibration, flights: Sequence[DetectorFlight],
+               false_alarm_probability: float) -> dict[str, float]:
+    """Each test's false-alarm rate (rates()) averaged over the flights."""
+    measured = [rates(calibration, flight, false_alarm_probability) for flight in flights]
+    return {test: float(np.mean([m[test] for m in measured])) for test in TESTS}
+
+
 def first_combined_alarm_s(calibration: Calibration, flight: DetectorFlight,
                            false_alarm_probability: float, after_s: float) -> float | None:
     """Time of the first combined alarm at or after after_s [s]; None if there is none."""
