@@ -118,22 +118,37 @@ def test_stamp_matcher_releases_complete_sets_in_stamp_order() -> None:
 
 
 @pytest.mark.timeout(30)
-def test_an_optional_stream_is_waited_for_only_while_it_is_published() -> None:
+def test_an_optional_stream_is_waited_for_until_late_lost_or_waited_out() -> None:
     published = {"air": True}
     matcher = StampMatcher(("state",), ("air",), lambda stream: published[stream],
                            optional_wait=2)
     assert matcher.add("state", 100, "s1") == []                      # air may still come
     assert matcher.add("air", 100, "a1") == [(100, {"state": "s1", "air": "a1"})]
     assert matcher.add("state", 200, "s2") == []
-    assert matcher.add("state", 300, "s3") == []                      # air of 200 late...
-    assert matcher.add("air", 300, "a3") == []
-    assert matcher.add("state", 400, "s4") == [(200, {"state": "s2"}),  # ...or lost
-                                               (300, {"state": "s3", "air": "a3"})]
+    assert matcher.add("state", 300, "s3") == []
+    assert matcher.add("state", 400, "s4") == [(200, {"state": "s2"})]  # air of 200 late...
     assert matcher.add("air", 200, "a2") == [] and matcher.late_optional == 1
+    assert matcher.add("air", 400, "a4") == [(300, {"state": "s3"}),  # ...300's lost: 400's came
+                                             (400, {"state": "s4", "air": "a4"})]
     assert not matcher.is_backwards(450)
-    published["air"] = False
-    assert matcher.add("state", 500, "s5") == [(400, {"state": "s4"}), (500, {"state": "s5"})]
+    published["air"] = False  # its publisher gone: what it sent may still be queued
+    assert matcher.add("state", 500, "s5") == []
+    assert matcher.add("air", 500, "a5") == [(500, {"state": "s5", "air": "a5"})]
+    assert matcher.add("state", 600, "s6") == []
+    assert matcher.add("state", 700, "s7") == []
+    assert matcher.add("state", 800, "s8") == [(600, {"state": "s6"}),  # waited out...
+                                               (700, {"state": "s7"}), (800, {"state": "s8"})]
+    assert matcher.add("state", 900, "s9") == [(900, {"state": "s9"})]  # ...then not waited for
     assert matcher.dropped_sets == 0
+
+
+@pytest.mark.timeout(30)
+def test_an_optional_stream_never_heard_from_is_not_waited_for_without_a_publisher() -> None:
+    matcher = StampMatcher(("state",), ("air",), lambda stream: False, optional_wait=2)
+    assert matcher.add("state", 100, "s1") == [(100, {"state": "s1"})]
+    assert matcher.add("air", 200, "a2") == []
+    matcher.reset()  # heard before the restart: not after it
+    assert matcher.add("state", 100, "s1") == [(100, {"state": "s1"})]
 
 
 @pytest.mark.timeout(30)

@@ -70,12 +70,17 @@ class StampMatcher:
     """Collects one payload per stream for each stamp and releases complete sets in order.
 
     A set is released when every required stream has delivered its stamp and every optional
-    one has too, or is not awaited (awaited(stream) False: nobody publishes it), or
-    optional_wait newer stamps' required sets are complete (that optional message is late
-    or lost: the set goes without it, and the message, should it come, is dropped and
-    counted). Older sets whose required part never completed are dropped when a newer one
-    is released, and counted. `guard` holds the newest released stamp: the caller asks it
-    about each required message first (a stray is dropped, a restart resets).
+    one has too, or is not waited for, or optional_wait newer stamps' required sets are
+    complete (that optional message is late or lost: the set goes without it, and the
+    message, should it come, is dropped and counted). An optional stream is waited for while
+    it has a publisher (awaited(stream)) and, once heard from, after its publisher has gone
+    too: what it sent may still be queued here (a simulator that finished while this node
+    was behind), until a set has gone without it for the full wait. A stream that has
+    delivered a newer stamp is not waited for (one publisher's messages come in order: the
+    one missing was lost, or dropped as a stray before a restart). Older sets whose
+    required part never completed are dropped when a newer one is released, and counted.
+    `guard` holds the newest released stamp: the caller asks it about each required message
+    first (a stray is dropped, a restart resets).
     """
 
     streams: tuple[str, ...]
@@ -86,10 +91,15 @@ class StampMatcher:
     guard: StampGuard = field(default_factory=StampGuard)
     dropped_sets: int = 0
     late_optional: int = 0
+    # the newest stamp of each optional stream heard from since the reset
+    newest_optional_ns: dict[str, int] = field(default_factory=dict)
+    abandoned: set[str] = field(default_factory=set)  # heard, gone, and waited out
 
     def reset(self) -> None:
         self.pending.clear()
         self.guard.reset()
+        self.newest_optional_ns.clear()
+        self.abandoned.clear()
 
     def is_backwards(self, stamp_ns: int) -> bool:
         """Whether a stamp lies at or before the newest released one."""
@@ -99,6 +109,14 @@ class StampMatcher:
     def _complete(self, entry: dict[str, Any]) -> bool:
         return all(stream in entry for stream in self.streams)
 
+    def _waits_for(self, stream: str, stamp_ns: int) -> bool:
+        """Whether the set of stamp_ns, missing this optional stream's message, holds for it."""
+        if self.newest_optional_ns.get(stream, stamp_ns) > stamp_ns:
+            return False
+        if self.awaited(stream):
+            return True
+        return stream in self.newest_optional_ns and stream not in self.abandoned
+
     def add(self, stream: str, stamp_ns: int, payload: Any) -> list[tuple[int, dict[str, Any]]]:
         """Store one message; return the sets it lets go, oldest first."""
         if stream not in self.streams + self.optional:
@@ -107,6 +125,10 @@ class StampMatcher:
         if stream in self.optional and not self.guard.in_order(stamp_ns):
             self.late_optional += 1  # its set went without it (or a stray stamp)
             return []
+        if stream in self.optional:
+            newest = self.newest_optional_ns.get(stream, stamp_ns)
+            self.newest_optional_ns[stream] = max(stamp_ns, newest)
+            self.abandoned.discard(stream)
         self.pending.setdefault(stamp_ns, {})[stream] = payload
         complete = sorted(stamp for stamp, entry in self.pending.items()
                           if self._complete(entry))
@@ -117,10 +139,11 @@ class StampMatcher:
                 del self.pending[stamp]
                 self.dropped_sets += 1
                 continue
-            newer = len(complete) - 1 - complete.index(stamp)
-            if newer < self.optional_wait and any(
-                    o not in entry and self.awaited(o) for o in self.optional):
+            missing = [o for o in self.optional
+                       if o not in entry and self._waits_for(o, stamp)]
+            if missing and len(complete) - 1 - complete.index(stamp) < self.optional_wait:
                 break  # its optional message may still come
+            self.abandoned.update(o for o in missing if not self.awaited(o))
             released.append((stamp, self.pending.pop(stamp)))
             self.guard.accept(stamp)
         return released
