@@ -44,11 +44,12 @@ class MatchedStreams:
     """Subscribes each topic (reliable, keep-all) in the order given: sim_node's
     wait_for_subscribers counts `state` subscriptions, so list `state` last. Complete sets
     go to on_sample(time_s, arrays by topic) in stamp order, with the optional topics'
-    arrays where they came (waited for, for up to StampMatcher.optional_wait newer sets, while
-    the topic has a publisher or may still have messages queued). A required message whose stamp is a stray
-    (StampGuard: a duplicate, one going backwards or far ahead) is dropped and counted; a
-    restarted source (several such stamps in a row) is warned of (ending with restart_note:
-    what on_restart does), resets the matcher and calls on_restart() first."""
+    arrays where they came (waited for, for up to StampMatcher.optional_wait newer sets,
+    while the topic has a publisher or may still have messages queued). A required message
+    whose stamp is a stray (StampGuard: a duplicate, one going backwards or far ahead) is
+    dropped and counted; a restarted source (several such stamps in a row) is warned of
+    (ending with restart_note: what on_restart does), resets the matcher and calls
+    on_restart() first."""
 
     def __init__(self, node: Node, streams: Streams,
                  on_sample: Callable[[float, dict[str, Any]], None],
