@@ -35,6 +35,7 @@ import osqp
 import piqp
 import quadprog
 import scipy.sparse as sp
+from proxsuite import proxqp
 from uav_fault_estimator.analysis.offline import PACKAGE
 from uav_fault_estimator.analysis.report import residual_update_period_s
 from uav_fault_estimator.estimation.estimator_config import (
@@ -52,6 +53,8 @@ from uav_sim.simulation import Simulation
 
 UPDATE_PERIOD_S = residual_update_period_s()  # residual_node's, as the node publishes
 EPS = 1e-6  # absolute tolerance asked of every iterative solver
+ACTIVE_PCT = 1e-6  # an increment or a bound this close to its limit counts as active [%]
+BIG = 1e20  # "no bound" in a ProxSuite row
 
 
 def node_config(wind_errors: bool = False) -> EstimatorConfig:
@@ -319,6 +322,119 @@ def scaling(flown: tuple[np.ndarray, ...], updates: int) -> dict:
     return figures
 
 
+def anatomy(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) -> dict:
+    """Where the project's update goes (config's N, p; once the window is full): ProxSuite's
+    own setup (taking the new H and g) and solve, the rest (Python: arrival cost, data
+    terms, refill, the call), iterations and penalty (mu) updates, at the median and over
+    the slowest 1 % of updates [ms]. A table printed; the figures returned."""
+    estimator = MovingHorizonEstimator(config)
+    rows = []
+    for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
+        result = estimator.update(y, s, valid)
+        info = estimator.solver.info
+        if index >= config.horizon - 1:
+            rows.append((result.update_time_ms, info.setup_time * 1e-3,
+                         info.solve_time * 1e-3, info.iter, info.mu_updates))
+    table = np.array(rows)
+    slowest = table[table[:, 0] >= np.percentile(table[:, 0], 99)]
+    names = ("update_ms", "proxsuite_setup_ms", "proxsuite_solve_ms", "iterations",
+             "penalty_updates")
+    figures = {"horizon": config.horizon,
+               "median": dict(zip(names, np.round(np.median(table, axis=0), 4).tolist(),
+                                  strict=True)),
+               "slowest_1pct_mean": dict(zip(names, np.round(slowest.mean(axis=0), 4).tolist(),
+                                             strict=True))}
+    for label, values in (("median", figures["median"]),
+                          ("slowest 1 %", figures["slowest_1pct_mean"])):
+        rest = values["update_ms"] - values["proxsuite_setup_ms"] - values["proxsuite_solve_ms"]
+        print(f"| {config.horizon} | {label} | {values['update_ms']:.3f} | "
+              f"{values['proxsuite_setup_ms']:.3f} | {values['proxsuite_solve_ms']:.3f} | "
+              f"{rest:.3f} | {values['iterations']:.1f} | {values['penalty_updates']:.1f} |")
+    return figures
+
+
+def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) -> dict:
+    """What a QP reduced to its active set would cost ProxSuite, for monotonic faults (the
+    node's four): each window's solution taken as known (solved to 1e-9), stages whose
+    increment is 0 merged and a first stage at its lower bound fixed, the reduced QP solved
+    by ProxSuite's dense backend from scratch at the estimator's tolerance (its build,
+    plain numpy here, not timed); and how often the previous window's active set, shifted
+    one stage, is this one's, which a guess-and-verify reduction would need. A line
+    printed; figures returned."""
+    eps = config.solver.eps_abs
+    estimator = MovingHorizonEstimator(dataclasses.replace(  # the solution, to 1e-9
+        config, solver=dataclasses.replace(config.solver, eps_abs=1e-9)))
+    problem = estimator.problem
+    lower = np.array([fault.lower_pct for fault in config.faults])
+    upper = np.array([fault.upper_pct for fault in config.faults])
+    times, sizes, deviations, previous, repeated = [], [], [], None, 0
+    for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
+        window = estimator.update(y, s, valid).window_pct
+        if index < config.horizon - 1:
+            continue
+        active = np.vstack([np.diff(window, axis=0) <= ACTIVE_PCT,
+                            window[:1] <= lower + ACTIVE_PCT])
+        if previous is not None:
+            repeated += np.array_equal(np.vstack([previous[1:-1], previous[-2:]]), active)
+        previous = active
+        merged, fixed, limits = reduced_form(problem, active, lower, upper)
+        hessian = problem.H.toarray()
+        reduced_hessian = merged.T @ hessian @ merged
+        gradient = merged.T @ (problem.g + hessian @ fixed)
+        qp = proxqp.dense.QP(merged.shape[1], 0, limits[0].shape[0])
+        qp.settings.eps_abs, qp.settings.eps_rel = eps, 0.0
+        start = time.perf_counter()
+        qp.init(reduced_hessian, gradient, None, None, *limits)
+        qp.solve()
+        times.append((time.perf_counter() - start) * 1e3)
+        x = fixed + merged @ qp.results.x
+        deviations.append(float(np.abs(x[problem.f_index] - window).max()))
+        sizes.append(merged.shape[1])
+    figures = {"variables_median": float(np.median(sizes)), "variables_max": int(max(sizes)),
+               "proxsuite_dense_median_ms": round(float(np.median(times)), 4),
+               "proxsuite_dense_p99_ms": round(float(np.percentile(times, 99)), 4),
+               "max_deviation": max(deviations), "shifted_active_set_right": repeated,
+               "windows": len(times) - 1}
+    print(f"\nThe QP reduced to its active set (N = {config.horizon}): "
+          f"{figures['variables_median']:.0f} variables median (max {figures['variables_max']}, "
+          f"full {problem.n_variables}); ProxSuite dense from scratch "
+          f"{figures['proxsuite_dense_median_ms']:.3f} ms median, "
+          f"{figures['proxsuite_dense_p99_ms']:.3f} p99; deviation from the full QP's "
+          f"{figures['max_deviation']:.1e}; the previous window's active set, shifted, right "
+          f"in {repeated} of {figures['windows']} windows")
+    return figures
+
+
+def reduced_form(problem: WindowQP, active: np.ndarray, lower: np.ndarray,
+                 upper: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """x = fixed + merged @ w for the active set of monotonic faults: active (N, p), rows
+    0 … N-2 whether the increment after each stage is 0, row N-1 whether the first stage
+    sits at its lower bound. Returns merged (n, r), fixed (n,) and (C, l, u) of the
+    reduced QP: a fault's segments non-decreasing, its first at least its lower bound, its
+    last at most its upper bound."""
+    fixed = np.zeros(problem.n_variables)
+    columns, constraints = [], []  # constraints: (coefficients by column, lower, upper)
+    for k in range(problem.n_faults):
+        segment = np.concatenate([[0], np.cumsum(~active[:-1, k])])
+        if active[-1, k]:
+            fixed[problem.f_index[segment == 0, k]] = lower[k]
+        first = len(columns)
+        for j in range(int(active[-1, k]), segment[-1] + 1):
+            columns.append(np.isin(np.arange(problem.n_variables),
+                                   problem.f_index[segment == j, k]).astype(float))
+        if first == len(columns):
+            continue
+        if not active[-1, k]:
+            constraints.append(({first: 1.0}, lower[k], BIG))
+        constraints.append(({len(columns) - 1: 1.0}, -BIG, upper[k]))
+        constraints += [({a: -1.0, a + 1: 1.0}, 0.0, BIG) for a in range(first, len(columns) - 1)]
+    c = np.zeros((len(constraints), len(columns)))
+    for row, (coefficients, _, _) in enumerate(constraints):
+        c[row, list(coefficients)] = list(coefficients.values())
+    bounds = np.array([(low, high) for _, low, high in constraints]).reshape(-1, 2)
+    return np.array(columns).T, fixed, (c, bounds[:, 0], bounds[:, 1])
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--updates", type=int, default=300)
@@ -338,6 +454,15 @@ def main() -> None:
     except RuntimeError as error:  # the reference could not solve it: no deviation to show
         print(f"\nfour faults and three wind errors: not compared ({error})")
     report.update(scaling(faults_only(flown), arguments.updates))
+    print("\nWhere the update goes [ms] (p = 4): ProxSuite's setup (new H, g) and solve, the "
+          "rest Python")
+    print("| N | updates | whole | setup | solve | rest | iterations | penalty updates |")
+    print("|---|---|---|---|---|---|---|---|")
+    report["anatomy"] = [anatomy(dataclasses.replace(node_config(), horizon=horizon),
+                                 tuple(a[: horizon + arguments.updates]
+                                       for a in faults_only(flown)))
+                         for horizon in (50, 400)]
+    report["active_set_bound"] = active_set_bound(node_config(), faults_only(first))
     if arguments.json:
         arguments.json.write_text(json.dumps(report, indent=2) + "\n")
 

@@ -1,8 +1,8 @@
 """ProxSuite (ProxQP, sparse backend) on a fixed-pattern WindowQP, with status mapping.
 
 - Sparse backend: the time-major QP's KKT matrix is banded (qp_problem.py).
-- The objective goes in scaled to a unit mean Hessian diagonal (`objective_scale`), so that
-  the absolute tolerance means the same whatever the residual units and noise levels.
+- The objective goes in scaled to a unit mean Hessian diagonal (`WindowQP.objective_scale`),
+  so that the absolute tolerance means the same whatever the residual units and noise levels.
 - Warm start from the shifted previous primal and dual solution, with a small initial
   penalty mu_in (WARM_START_MU_IN) on updates: the guess is close, so constraints are
   enforced stiffly at once and most updates need no penalty update (a refactorisation
@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 from proxsuite import proxqp
 
 from uav_fault_estimator.estimation.estimator_config import SolverSettings
@@ -64,6 +63,12 @@ class ProxQPSolver:
         self._scaled_h = problem.H.copy()
         self._initialised = False
 
+    @property
+    def info(self) -> proxqp.Info:
+        """ProxSuite's own account of the last solve (iterations, penalty updates, setup and
+        solve time [µs]): for profiling."""
+        return self._qp.results.info
+
     def apply(self, settings: SolverSettings) -> None:
         """Tolerances and iteration cap from the next solve on."""
         self.settings.eps_abs = settings.eps_abs
@@ -81,7 +86,7 @@ class ProxQPSolver:
         preconditioner is computed at the first call only (same pattern, same scale).
         """
         p = self.problem
-        scale = objective_scale(p.H)
+        scale = p.objective_scale()
         np.multiply(p.H.data, 1.0 / scale, out=self._scaled_h.data)
         scaled_g = p.g / scale
         if self._initialised:
@@ -111,8 +116,3 @@ class ProxQPSolver:
             solver_time_ms=results.info.run_time * 1e-3,
         )
 
-
-def objective_scale(hessian: sp.csc_matrix) -> float:
-    """Mean of |diag H|: the objective's scale (1 for an H without curvature)."""
-    scale = float(np.abs(hessian.diagonal()).mean())
-    return scale if np.isfinite(scale) and scale > 0.0 else 1.0

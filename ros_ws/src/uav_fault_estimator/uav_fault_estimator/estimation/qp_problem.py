@@ -218,6 +218,8 @@ class WindowQP:
         pattern.sort_indices()
         self.H = pattern
         self._block_position = _positions(pattern, block_rows, block_cols)
+        on_diagonal = np.flatnonzero(pattern.diagonal())
+        self._diagonal_position = _positions(pattern, on_diagonal, on_diagonal)
         model_position = _positions(pattern, rows[: model_values.size], cols[: model_values.size])
         self._h_model_data = np.zeros(pattern.nnz)
         np.add.at(self._h_model_data, model_position, model_values)
@@ -238,6 +240,13 @@ class WindowQP:
         np.copyto(g, self.g_model)
         g[self.f_index] -= linear
         g[self.f_index[0]] -= prior_information @ prior_pct
+
+
+    def objective_scale(self) -> float:
+        """Mean of |diag H| over all n variables: the objective's scale (1 for an H without
+        curvature)."""
+        scale = float(np.abs(self.H.data[self._diagonal_position]).sum()) / self.n_variables
+        return scale if np.isfinite(scale) and scale > 0.0 else 1.0
 
 
 def _positions(pattern: sp.csc_matrix, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
