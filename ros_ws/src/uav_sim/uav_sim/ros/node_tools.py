@@ -24,7 +24,8 @@ from rcl_interfaces.msg import (
     SetParametersResult,
 )
 from rclpy.clock import Clock, ClockType
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -284,8 +285,14 @@ def _stop(signum: int, _frame: object) -> None:
 def spin(node: Node) -> None:
     """rclpy.spin until a stop signal: the wait for work ends every STOP_POLL_S to look for
     one (a Python signal handler runs only between Python statements), and a signal ends it
-    between callbacks, never inside one."""
-    executor = SingleThreadedExecutor()
+    between callbacks, never inside one.
+
+    rclpy's EventsExecutor (C++, callbacks in the order their events came) rather than the
+    SingleThreadedExecutor (a Python wait set rebuilt for every callback): the default demo's
+    nodes took 6 / 5 / 10 ms of CPU per simulated second (detector, mhe, residual) instead
+    of 11 / 7 / 15, and the graph flew at 36.6-37.2 times real time instead of 28-31
+    (README, Performance)."""
+    executor = EventsExecutor()
     executor.add_node(node)
     _StopRequest.raises = False
     try:
