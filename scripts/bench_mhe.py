@@ -359,15 +359,16 @@ def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) 
     increment is 0 merged and a first stage at its lower bound fixed, the reduced QP solved
     by ProxSuite's dense backend from scratch at the estimator's tolerance (its build,
     plain numpy here, not timed); and how often the previous window's active set, shifted
-    one stage, is this one's, which a guess-and-verify reduction would need. A line
-    printed; figures returned."""
+    one stage, is this one's, or within it (merging no more than this one's active set:
+    what a guess-and-verify reduction needs to be exact at once). A line printed; figures
+    returned."""
     eps = config.solver.eps_abs
     estimator = MovingHorizonEstimator(dataclasses.replace(  # the solution, to 1e-9
         config, solver=dataclasses.replace(config.solver, eps_abs=1e-9)))
     problem = estimator.problem
     lower = np.array([fault.lower_pct for fault in config.faults])
     upper = np.array([fault.upper_pct for fault in config.faults])
-    times, sizes, deviations, previous, repeated = [], [], [], None, 0
+    times, sizes, deviations, previous, repeated, contained = [], [], [], None, 0, 0
     for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
         window = estimator.update(y, s, valid).window_pct
         if index < config.horizon - 1:
@@ -375,7 +376,9 @@ def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) 
         active = np.vstack([np.diff(window, axis=0) <= ACTIVE_PCT,
                             window[:1] <= lower + ACTIVE_PCT])
         if previous is not None:
-            repeated += np.array_equal(np.vstack([previous[1:-1], previous[-2:]]), active)
+            guess = np.vstack([previous[1:-1], previous[-2:]])
+            repeated += np.array_equal(guess, active)
+            contained += bool(np.all(active[guess]))
         previous = active
         merged, fixed, limits = reduced_form(problem, active, lower, upper)
         hessian = problem.H.toarray()
@@ -394,14 +397,15 @@ def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) 
                "proxsuite_dense_median_ms": round(float(np.median(times)), 4),
                "proxsuite_dense_p99_ms": round(float(np.percentile(times, 99)), 4),
                "max_deviation": max(deviations), "shifted_active_set_right": repeated,
-               "windows": len(times) - 1}
+               "shifted_active_set_within": contained, "windows": len(times) - 1}
     print(f"\nThe QP reduced to its active set (N = {config.horizon}): "
           f"{figures['variables_median']:.0f} variables median (max {figures['variables_max']}, "
           f"full {problem.n_variables}); ProxSuite dense from scratch "
           f"{figures['proxsuite_dense_median_ms']:.3f} ms median, "
           f"{figures['proxsuite_dense_p99_ms']:.3f} p99; deviation from the full QP's "
           f"{figures['max_deviation']:.1e}; the previous window's active set, shifted, right "
-          f"in {repeated} of {figures['windows']} windows")
+          f"in {repeated} of {figures['windows']} windows, within this one's (what a reduction "
+          f"may merge) in {contained}")
     return figures
 
 
