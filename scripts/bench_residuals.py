@@ -6,8 +6,9 @@
 Flies the scenario's first S seconds in the core Simulation, records the samples, then
 times ResidualGenerator.update alone on them with residual_node's defaults (JSBSim
 prediction copies: the nominal one and one per fault of the paper's four, and one per wind
-error axis when wind_error_step_mps is set; S recomputed every 0.5 s). A residual is published every 0.5 s, i.e. every
-10 samples at 20 Hz, so its cost is the sum over those 10 samples.
+error axis when wind_error_step_mps is set; S recomputed every 0.5 s). A residual is
+published every 0.5 s, i.e. every 10 samples at 20 Hz, so its cost is the sum over those
+10 samples.
 """
 
 from __future__ import annotations
