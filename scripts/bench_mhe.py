@@ -357,11 +357,11 @@ def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) 
     """What a QP reduced to its active set would cost ProxSuite, for monotonic faults (the
     node's four): each window's solution taken as known (solved to 1e-9), stages whose
     increment is 0 merged and a first stage at its lower bound fixed, the reduced QP solved
-    by ProxSuite's dense backend from scratch at the estimator's tolerance (its build,
-    plain numpy here, not timed); and how often the previous window's active set, shifted
-    one stage, is this one's, or within it (merging no more than this one's active set:
-    what a guess-and-verify reduction needs to be exact at once). A line printed; figures
-    returned."""
+    by ProxSuite's dense backend from scratch at the estimator's tolerance (a new QP
+    object, init and solve timed; the reduced matrices, plain numpy here, not); and how
+    often the previous window's active set, shifted one stage, is this one's, or within it
+    (merging no more than this one's active set: what a guess-and-verify reduction needs
+    to be exact at once). A line printed; figures returned."""
     eps = config.solver.eps_abs
     estimator = MovingHorizonEstimator(dataclasses.replace(  # the solution, to 1e-9
         config, solver=dataclasses.replace(config.solver, eps_abs=1e-9)))
@@ -384,9 +384,9 @@ def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) 
         hessian = problem.H.toarray()
         reduced_hessian = merged.T @ hessian @ merged
         gradient = merged.T @ (problem.g + hessian @ fixed)
+        start = time.perf_counter()
         qp = proxqp.dense.QP(merged.shape[1], 0, limits[0].shape[0])
         qp.settings.eps_abs, qp.settings.eps_rel = eps, 0.0
-        start = time.perf_counter()
         qp.init(reduced_hessian, gradient, None, None, *limits)
         qp.solve()
         times.append((time.perf_counter() - start) * 1e3)
