@@ -291,7 +291,8 @@ def spin(node: Node) -> None:
     SingleThreadedExecutor (a Python wait set rebuilt for every callback): the default demo's
     nodes took 6 / 5 / 10 ms of CPU per simulated second (detector, mhe, residual) instead
     of 11 / 7 / 15, and the graph flew at 36.6-37.2 times real time instead of 28-31
-    (README, Performance)."""
+    (README, Performance). The nodes' timers all run on the steady clock: sim-time timers
+    under an events executor are not relied on (rclcpp's lacked them, ros2/rclcpp#2457)."""
     executor = EventsExecutor()
     executor.add_node(node)
     _StopRequest.raises = False
