@@ -66,6 +66,10 @@ def test_default_scenario_values(default_data):
         ("faults.0.ramp_s", -1, "'faults[0].ramp_s' must be at least 0"),
         ("waypoints_ne_m", [[0, 0]], "needs at least two"),
         ("waypoints_ne_m", [[0, 0], [1, "x"]], "'waypoints_ne_m[1]' must be [north_m, east_m]"),
+        ("waypoints_ne_m", [[0, 0], [500, 0], [500, 0], [0, 500]],
+         "'waypoints_ne_m[2]' is the same point as 'waypoints_ne_m[1]': a leg needs two"),
+        ("waypoints_ne_m", [[0, 0], [500, 0], [0, 0]],
+         "'waypoints_ne_m[0]' is the same point as 'waypoints_ne_m[2]'"),
         (
             "sensor_dropouts",
             [{"channel": "pitot", "start_s": 1, "end_s": 2}],

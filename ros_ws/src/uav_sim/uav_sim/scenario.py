@@ -162,7 +162,13 @@ def _waypoints(reader: Reader) -> tuple[tuple[float, float], ...]:
     for index, point in enumerate(points):
         if not (isinstance(point, list) and len(point) == 2 and all(map(is_number, point))):
             reader.fail(f"'waypoints_ne_m[{index}]' must be [north_m, east_m], got {point!r}")
-    return tuple((float(north), float(east)) for north, east in points)
+    waypoints = tuple((float(north), float(east)) for north, east in points)
+    for index, point in enumerate(waypoints):  # the legs close the loop: last to first
+        following = (index + 1) % len(waypoints)
+        if point == waypoints[following]:
+            reader.fail(f"'waypoints_ne_m[{following}]' is the same point as "
+                        f"'waypoints_ne_m[{index}]': a leg needs two distinct points")
+    return waypoints
 
 
 def _fault(reader: Reader) -> SeededFault:
