@@ -101,11 +101,6 @@ class StampMatcher:
         self.newest_optional_ns.clear()
         self.abandoned.clear()
 
-    def is_backwards(self, stamp_ns: int) -> bool:
-        """Whether a stamp lies at or before the newest released one."""
-        newest = self.guard.newest_ns
-        return newest is not None and stamp_ns <= newest
-
     def _complete(self, entry: dict[str, Any]) -> bool:
         return all(stream in entry for stream in self.streams)
 
