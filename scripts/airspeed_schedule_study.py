@@ -25,18 +25,16 @@ import time
 from pathlib import Path
 
 from uav_fault_estimator.analysis.airspeed_study import (
+    CALIBRATIONS,
     TESTS,
     at_airspeed,
+    compared_calibrations,
     fault_free_at,
     first_combined_alarm_s,
-    mean_rates,
+    rates_per_group,
 )
 from uav_fault_estimator.analysis.offline import fly_on_grid_each
-from uav_fault_estimator.detection.self_tuning import (
-    DEFAULT_SAMPLE_PERIOD_S,
-    DEFAULT_SETTLE_S,
-    calibrate,
-)
+from uav_fault_estimator.detection.self_tuning import DEFAULT_SAMPLE_PERIOD_S
 from uav_sim.paths import default_parameters, scenarios_dir
 from uav_sim.scenario import load_scenario
 
@@ -45,7 +43,6 @@ TEST_AIRSPEEDS_MPS = (19.0, 23.0, 27.0, 33.0)
 FAULT_AIRSPEEDS_MPS = (23.0, 27.0)
 TEST_FLIGHTS_PER_AIRSPEED = 3
 CALIBRATION_SEED, TEST_SEED = 301, 401
-CALIBRATIONS = ("one_airspeed", "unscheduled", "scheduled")  # as main() makes them
 
 
 def main() -> int:
@@ -69,17 +66,12 @@ def main() -> int:
     calibration_flights, rest = flights[:count], flights[count:]
     faults = len(FAULT_AIRSPEEDS_MPS)
     test_flights, fault_flights = rest[:-faults], rest[-faults:]
-    one_airspeed = calibration_flights[arguments.per_airspeed:2 * arguments.per_airspeed]
     results = {}
-    for name, flown, scheduled in (("one_airspeed", one_airspeed, False),
-                                   ("unscheduled", calibration_flights, False),
-                                   ("scheduled", calibration_flights, True)):
-        calibration = calibrate(flown, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
-                                node["window"], DEFAULT_SETTLE_S, scheduled=scheduled)
-        per_airspeed = {}
-        for k, airspeed in enumerate(TEST_AIRSPEEDS_MPS):
-            flown = test_flights[k * TEST_FLIGHTS_PER_AIRSPEED:(k + 1) * TEST_FLIGHTS_PER_AIRSPEED]
-            per_airspeed[f"{airspeed:g}"] = mean_rates(calibration, flown, p_fa)
+    made = compared_calibrations(calibration_flights, arguments.per_airspeed, node)
+    for name, calibration in made.items():
+        per_airspeed = {f"{airspeed:g}": row for airspeed, row in zip(
+            TEST_AIRSPEEDS_MPS, rates_per_group(calibration, test_flights,
+                                                TEST_FLIGHTS_PER_AIRSPEED, p_fa), strict=True)}
         delays = {}
         for airspeed, flight in zip(FAULT_AIRSPEEDS_MPS, fault_flights, strict=True):
             alarm_s = first_combined_alarm_s(calibration, flight, p_fa, fault_start_s)

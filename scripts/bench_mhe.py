@@ -27,6 +27,7 @@ import argparse
 import dataclasses
 import json
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import clarabel
@@ -42,7 +43,7 @@ from uav_fault_estimator.estimation.estimator_config import (
     EstimatorConfig,
     config_from_parameters,
 )
-from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.reference_qp import clarabel_form, solve_reference
@@ -121,15 +122,22 @@ def synthetic_config(horizon: int, faults: int) -> EstimatorConfig:
     )
 
 
+def full_window_updates(estimator: MovingHorizonEstimator,
+                        sequence: tuple[np.ndarray, ...]) -> Iterator[EstimateResult]:
+    """Feed the sequence (y, S, valid) to the estimator; yield each update's result once the
+    window is full (the estimator's QP then holds that update's H and g)."""
+    for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
+        result = estimator.update(y, s, valid)
+        if index >= estimator.config.horizon - 1:
+            yield result
+
+
 def run_estimator(config: EstimatorConfig, sequence: tuple[np.ndarray, ...],
                   keep_qps: bool = False) -> tuple[np.ndarray, list, WindowQP]:
     """Update times [ms] once the window is full, and (H, g, x) of each of those QPs."""
     estimator = MovingHorizonEstimator(config)
     times, snapshots = [], []
-    for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
-        result = estimator.update(y, s, valid)
-        if index < config.horizon - 1:
-            continue
+    for result in full_window_updates(estimator, sequence):
         times.append(result.update_time_ms)
         if keep_qps:
             problem = estimator.problem
@@ -329,12 +337,10 @@ def anatomy(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) -> dict:
     the slowest 1 % of updates [ms]. A table printed; the figures returned."""
     estimator = MovingHorizonEstimator(config)
     rows = []
-    for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
-        result = estimator.update(y, s, valid)
+    for result in full_window_updates(estimator, sequence):
         info = estimator.solver.info
-        if index >= config.horizon - 1:
-            rows.append((result.update_time_ms, info.setup_time * 1e-3,
-                         info.solve_time * 1e-3, info.iter, info.mu_updates))
+        rows.append((result.update_time_ms, info.setup_time * 1e-3, info.solve_time * 1e-3,
+                     info.iter, info.mu_updates))
     table = np.array(rows)
     slowest = table[table[:, 0] >= np.percentile(table[:, 0], 99)]
     names = ("update_ms", "proxsuite_setup_ms", "proxsuite_solve_ms", "iterations",
@@ -369,10 +375,8 @@ def active_set_bound(config: EstimatorConfig, sequence: tuple[np.ndarray, ...]) 
     lower = np.array([fault.lower_pct for fault in config.faults])
     upper = np.array([fault.upper_pct for fault in config.faults])
     times, sizes, deviations, previous, repeated, contained = [], [], [], None, 0, 0
-    for index, (y, s, valid) in enumerate(zip(*sequence, strict=True)):
-        window = estimator.update(y, s, valid).window_pct
-        if index < config.horizon - 1:
-            continue
+    for result in full_window_updates(estimator, sequence):
+        window = result.window_pct
         active = np.vstack([np.diff(window, axis=0) <= ACTIVE_PCT,
                             window[:1] <= lower + ACTIVE_PCT])
         if previous is not None:

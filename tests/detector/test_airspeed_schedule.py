@@ -20,18 +20,14 @@ import yaml
 from uav_fault_estimator.analysis.airspeed_study import (
     TESTS,
     at_airspeed,
+    calibrated,
+    compared_calibrations,
     fault_free_at,
     first_combined_alarm_s,
-    mean_rates,
+    rates_per_group,
 )
 from uav_fault_estimator.analysis.offline import fly_on_grid_each
-from uav_fault_estimator.detection.self_tuning import (
-    DEFAULT_SAMPLE_PERIOD_S,
-    DEFAULT_SETTLE_S,
-    Calibration,
-    calibrate,
-    load_calibration,
-)
+from uav_fault_estimator.detection.self_tuning import DEFAULT_SAMPLE_PERIOD_S, load_calibration
 from uav_sim.paths import default_parameters, scenarios_dir
 from uav_sim.scenario import load_scenario
 
@@ -41,11 +37,6 @@ CALIBRATION_AIRSPEEDS_MPS = (21.0, 25.0, 29.0)
 UNSEEN_AIRSPEEDS_MPS = (23.0, 27.0)
 PER_AIRSPEED = 4  # calibration flights at each airspeed
 UNSEEN_PER_AIRSPEED = 3  # test flights at each unseen airspeed
-
-
-def calibrated(flights, scheduled: bool) -> Calibration:
-    return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, NODE["forgetting_factor"], NODE["window"],
-                     DEFAULT_SETTLE_S, scheduled=scheduled)
 
 
 @pytest.fixture(scope="module")
@@ -64,13 +55,8 @@ def flown():
 @pytest.mark.timeout(240)
 def test_unseen_airspeeds_stay_within_three_times_the_design_and_faults_come_sooner(flown):
     calibration_flights, unseen, fault_flight, onset_s = flown
-    at_25 = calibration_flights[PER_AIRSPEED:2 * PER_AIRSPEED]
-    made = {"one_airspeed": calibrated(at_25, False),
-            "unscheduled": calibrated(calibration_flights, False),
-            "scheduled": calibrated(calibration_flights, True)}
-    measured = {name: [mean_rates(calibration, unseen[k * UNSEEN_PER_AIRSPEED:
-                                                     (k + 1) * UNSEEN_PER_AIRSPEED], P_FA)
-                       for k in range(len(UNSEEN_AIRSPEEDS_MPS))]
+    made = compared_calibrations(calibration_flights, PER_AIRSPEED, NODE)
+    measured = {name: rates_per_group(calibration, unseen, UNSEEN_PER_AIRSPEED, P_FA)
                 for name, calibration in made.items()}
     for name, per_airspeed in measured.items():
         for airspeed, row in zip(UNSEEN_AIRSPEEDS_MPS, per_airspeed, strict=True):
@@ -91,12 +77,12 @@ def test_a_schedule_from_one_airspeed_is_refused(flown):
     calibration_flights, *_ = flown
     with pytest.raises(ValueError, match=r"^the calibration flights span 2\d\.\d-2\d\.\d m/s "
                                          r"of airspeed: an airspeed schedule needs at least 2 "):
-        calibrated(calibration_flights[PER_AIRSPEED:2 * PER_AIRSPEED], True)
+        calibrated(calibration_flights[PER_AIRSPEED:2 * PER_AIRSPEED], NODE, True)
 
 
 @pytest.mark.timeout(240)
 def test_a_scheduled_calibration_round_trips_and_names_its_airframe(flown, tmp_path):
-    calibration = calibrated(flown[0], True)
+    calibration = calibrated(flown[0], NODE, True)
     assert calibration.airframe == "aerosonde_sim" and calibration.scheduled
     assert 24.0 < calibration.reference_airspeed_mps < 26.0
     path = tmp_path / "calibration.yaml"

@@ -15,13 +15,17 @@ from uav_sim.scenario import Scenario
 from uav_fault_estimator.analysis.offline import fault_free_flights
 from uav_fault_estimator.detection.self_tuning import (
     CHANNELS,
+    DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_SETTLE_S,
     Calibration,
     DetectorFlight,
+    calibrate,
     run_detector,
 )
 
 # The tests whose rates are measured, in the order of rates()' values.
 TESTS = (*(f"glrt_{name}" for name in CHANNELS), "parameters", "combined")
+CALIBRATIONS = ("one_airspeed", "unscheduled", "scheduled")  # compared_calibrations' keys
 
 
 def at_airspeed(scenario: Scenario, airspeed_mps: float) -> Scenario:
@@ -66,3 +70,29 @@ def first_combined_alarm_s(calibration: Calibration, flight: DetectorFlight,
     return next((sample.time_s for sample in
                  run_detector(calibration, flight, false_alarm_probability)
                  if sample.combined_alarm and sample.time_s >= after_s), None)
+
+
+def calibrated(flights: Sequence[DetectorFlight], detector_parameters: dict,
+               scheduled: bool) -> Calibration:
+    """self_tuning.calibrate on the flights with detector_node's forgetting factor and window
+    (detector_parameters: its parameters), with or without the airspeed schedule."""
+    return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, detector_parameters["forgetting_factor"],
+                     detector_parameters["window"], DEFAULT_SETTLE_S, scheduled=scheduled)
+
+
+def compared_calibrations(flights: Sequence[DetectorFlight], per_airspeed: int,
+                          detector_parameters: dict) -> dict[str, Calibration]:
+    """The calibrations the study compares (CALIBRATIONS), from per_airspeed flights at each
+    of three calibration airspeeds, in order: one_airspeed (the middle airspeed's flights
+    alone), unscheduled and scheduled (all of them)."""
+    middle = flights[per_airspeed:2 * per_airspeed]
+    return {"one_airspeed": calibrated(middle, detector_parameters, False),
+            "unscheduled": calibrated(flights, detector_parameters, False),
+            "scheduled": calibrated(flights, detector_parameters, True)}
+
+
+def rates_per_group(calibration: Calibration, flights: Sequence[DetectorFlight],
+                    group_size: int, false_alarm_probability: float) -> list[dict[str, float]]:
+    """mean_rates over each run of group_size consecutive flights (one run per airspeed)."""
+    return [mean_rates(calibration, flights[start:start + group_size], false_alarm_probability)
+            for start in range(0, len(flights), group_size)]
