@@ -46,8 +46,8 @@ MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
              "estimate_wind_errors, fault_model_coefficients, fault_model_scales_pct, "
              "fault_models, fault_names, handover_variances_pct2, horizon, lower_bounds_pct, "
              "noise_calibration_file, noise_variance_factor, prior_pct, solver_eps_abs, "
-             "solver_max_iter, upper_bounds_pct, wind_error_handover_variance_m2ps2, "
-             "wind_error_sigma_mps")
+             "solver_max_iter, solver_method, upper_bounds_pct, "
+             "wind_error_handover_variance_m2ps2, wind_error_sigma_mps")
 
 
 @pytest.mark.timeout(30)
@@ -169,6 +169,9 @@ CASES = {
         "uav_fault_estimator", "mhe_node", ["-p", "solver_max_iter:=0"],
         "mhe_node: parameter solver_max_iter: 0 is out of range; it must be an integer in "
         "[1, 100000]"),
+    "solver_method_unknown": (
+        "uav_fault_estimator", "mhe_node", ["-p", "solver_method:=fastest"],
+        "mhe_node: solver method must be one of proxsuite, active_set, got 'fastest'"),
     "horizon_that_would_exhaust_memory": (
         "uav_fault_estimator", "mhe_node", ["-p", "horizon:=1000000"],
         "mhe_node: parameter horizon: 1000000 is out of range; it must be an integer in "

@@ -11,6 +11,7 @@ import numpy as np
 from uav_sim.channels import PAPER_FAULT_NAMES
 
 from uav_fault_estimator.estimation.fault_models import SCALE_PARAMETER, FaultModel, make_model
+from uav_fault_estimator.estimation.monotone_active_set import is_monotone
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
@@ -44,13 +45,21 @@ class FaultConfig:
             raise ValueError(f"fault {self.name}: {error}") from None
 
 
+# How each window's QP is solved: ProxSuite (any fault model), or the exact active-set
+# method for monotonic increasing faults (monotone_active_set.py; ProxSuite solves the
+# windows where it does not settle).
+SOLVER_METHODS = ("proxsuite", "active_set")
+
+
 @dataclass
 class SolverSettings:
-    """ProxSuite settings: absolute/relative KKT tolerances and the iteration cap."""
+    """method: one of SOLVER_METHODS; ProxSuite's absolute/relative KKT tolerances and its
+    iteration cap."""
 
     eps_abs: float = 1e-6
     eps_rel: float = 0.0
     max_iter: int = 200
+    method: str = "proxsuite"
 
 
 @dataclass
@@ -95,8 +104,14 @@ class EstimatorConfig:
         for name, values in (("q_diag", self.q_diag), ("r_diag_pct2", self.r_diag_pct2)):
             if not all(math.isfinite(v) and v > 0 for v in values):
                 raise ValueError(f"{name} entries must be positive and finite")
-        for fault in self.faults:
-            fault.build_model()
+        models = [fault.build_model() for fault in self.faults]
+        if self.solver.method not in SOLVER_METHODS:
+            raise ValueError(f"solver method must be one of {', '.join(SOLVER_METHODS)}, got "
+                             f"{self.solver.method!r}")
+        if self.solver.method == "active_set" and not is_monotone(
+                [model.increment_terms() for model in models]):
+            raise ValueError("the active_set solver method needs every estimated column "
+                             "monotonic (increasing), without wind-error columns")
 
     def window_qp(self, stages: int) -> WindowQP:
         """The MAP QP over `stages` stages for these faults' models and bounds."""
@@ -175,7 +190,8 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
         r_diag_pct2=tuple(handover),
         faults=faults,
         solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
-                              max_iter=parameters["solver_max_iter"]),
+                              max_iter=parameters["solver_max_iter"],
+                              method=parameters["solver_method"]),
         arrival_inflation=parameters["arrival_inflation"],
         arrival_floor_pct2=tuple(floor),
         arrival_centre=parameters["arrival_centre"],

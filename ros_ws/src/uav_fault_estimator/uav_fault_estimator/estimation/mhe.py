@@ -17,6 +17,7 @@ import numpy as np
 
 from uav_fault_estimator.estimation.arrival_cost import ArrivalCost, increment_prior
 from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
+from uav_fault_estimator.estimation.monotone_active_set import MonotoneActiveSet
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver, SolveOutcome
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
 from uav_fault_estimator.estimation.solve_status import SolveStatus
@@ -28,10 +29,11 @@ class EstimateResult:
 
     column_names (p,): what each column estimates (faults, then any nuisance parameters);
     fault_pct (p,): estimate of f(t) [%]; window_pct (N, p): estimates over the window,
-    oldest first [%]; status; iterations of the solver; update_time_ms: the whole update
-    call [ms]; update_cpu_ms: the same call's CPU time in the calling thread [ms] (what
-    it costs, whatever shares the cores); solver_time_ms: ProxSuite's own run time [ms] (0
-    when not solved).
+    oldest first [%]; status; iterations of the solver (rounds of the active-set method);
+    update_time_ms: the whole update call [ms]; update_cpu_ms: the same call's CPU time in
+    the calling thread [ms] (what it costs, whatever shares the cores); solver_time_ms: the
+    solver's own run time [ms] (0 when not solved); solved_by: the SOLVER_METHODS entry that
+    solved this window ("" when none ran).
     """
 
     column_names: tuple[str, ...]
@@ -42,6 +44,7 @@ class EstimateResult:
     update_time_ms: float
     update_cpu_ms: float
     solver_time_ms: float
+    solved_by: str
 
     def columns(self, names: Sequence[str]) -> list[int]:
         """Indices of the named columns (ValueError for a name not estimated)."""
@@ -69,6 +72,8 @@ class MovingHorizonEstimator:
         config = self.config
         n, p = config.horizon, len(config.faults)
         self.solver = ProxQPSolver(self.problem, config.solver)
+        self.active_set = (MonotoneActiveSet(self.problem)
+                           if config.solver.method == "active_set" else None)
         self.arrival = ArrivalCost(
             self._coefficients, self._increments[:, 0], self._increments[:, 1],
             config.prior_pct, np.diag(config.r_diag_pct2), config.arrival_inflation,
@@ -98,8 +103,8 @@ class MovingHorizonEstimator:
         """
         config.validate()
         current = self.config
-        for name in ("horizon", "faults", "arrival_centre"):
-            if getattr(config, name) != getattr(current, name):
+        for name in ("horizon", "faults", "arrival_centre", "solver.method"):
+            if _attribute(config, name) != _attribute(current, name):
                 raise ValueError(f"{name} shapes the estimator's QP: it changes only at a "
                                  "restart of the node")
         ratio = config.q_inv / self._q_inv
@@ -144,11 +149,23 @@ class MovingHorizonEstimator:
         centre = (self.arrival.mean if self.config.arrival_centre == "filter"
                   else self._x[self.problem.f_index[0]])
         self.problem.set_data(self._gram, self._linear, self.arrival.information, centre)
-        outcome = self.solver.solve(self._x, self._y_dual, self._z_dual)
+        outcome = self._solve()
         if outcome.status is SolveStatus.SOLVED:
             self._x, self._y_dual, self._z_dual = outcome.x, outcome.y, outcome.z
             self._window_pct = outcome.x[self.problem.f_index]
         return self._result(outcome.status, outcome, start)
+
+    def _solve(self) -> SolveOutcome:
+        """This window's QP by the active-set method when configured and it settles, else
+        by ProxSuite; both from the previous solution, shifted."""
+        if self.active_set is not None:
+            start = time.perf_counter()
+            solution = self.active_set.solve(self._x[self.problem.f_index])
+            if solution is not None:
+                return SolveOutcome(solution.x, self._y_dual, solution.z, SolveStatus.SOLVED,
+                                    solution.rounds, (time.perf_counter() - start) * 1e3,
+                                    "active_set")
+        return self.solver.solve(self._x, self._y_dual, self._z_dual)
 
     def _push_sample(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None,
                      q_inv: np.ndarray) -> bool:
@@ -185,4 +202,13 @@ class MovingHorizonEstimator:
             update_time_ms=(time.perf_counter() - start[0]) * 1e3,
             update_cpu_ms=(time.thread_time() - start[1]) * 1e3,
             solver_time_ms=outcome.solver_time_ms if outcome else 0.0,
+            solved_by=outcome.solved_by if outcome else "",
         )
+
+
+def _attribute(config: EstimatorConfig, dotted: str) -> object:
+    """config's attribute at a dotted name ("solver.method")."""
+    value: object = config
+    for name in dotted.split("."):
+        value = getattr(value, name)
+    return value

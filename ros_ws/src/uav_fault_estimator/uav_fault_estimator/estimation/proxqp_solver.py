@@ -36,8 +36,9 @@ _STATUS_OF = {
 
 @dataclass
 class SolveOutcome:
-    """One solve: primal x, multipliers y (equalities) and z (inequalities), status,
-    iterations and ProxSuite's own run time [ms]."""
+    """One solve: primal x, multipliers y (equalities) and z (inequalities, ProxSuite's
+    sign convention), status, iterations, the solver's own run time [ms] and which solver
+    (estimator_config.SOLVER_METHODS)."""
 
     x: np.ndarray
     y: np.ndarray
@@ -45,6 +46,7 @@ class SolveOutcome:
     status: SolveStatus
     iterations: int
     solver_time_ms: float
+    solved_by: str = "proxsuite"
 
 
 class ProxQPSolver:

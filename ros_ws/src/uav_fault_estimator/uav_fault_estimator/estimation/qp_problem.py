@@ -241,6 +241,10 @@ class WindowQP:
         g[self.f_index] -= linear
         g[self.f_index[0]] -= prior_information @ prior_pct
 
+    def stage_blocks(self) -> np.ndarray:
+        """H's pxp block of every stage, (T, p, p) [1/%²], a copy: the data term, the arrival
+        cost on the first stage and any model curvature on the blocks' diagonals."""
+        return self.H.data[self._block_position]
 
     def objective_scale(self) -> float:
         """Mean of |diag H| over all n variables: the objective's scale (1 for an H without

@@ -27,6 +27,7 @@ from uav_sim.ros.node_tools import (
 )
 
 from uav_fault_estimator.estimation.estimator_config import (
+    SOLVER_METHODS,
     config_from_parameters,
     noise_calibration,
 )
@@ -74,6 +75,9 @@ PARAMETERS = {
         "random-walk step of each wind error per residual sample [m/s]", 1e-4, 10.0),
     "wind_error_handover_variance_m2ps2": ParameterSpec(
         "R of eq. 17 for each wind error [m^2/s^2]", 1e-6, 1e4, live=True),
+    "solver_method": ParameterSpec(
+        "proxsuite (any fault model) or active_set (exact, for monotonic faults only; "
+        "ProxSuite solves the windows where it does not settle)"),
     "solver_eps_abs": ParameterSpec("ProxSuite's absolute tolerance (on the scaled problem)",
                                     1e-12, 0.1, live=True),
     "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000,
@@ -101,7 +105,8 @@ class MheNode(Node):
         self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
-                       "stamp_resets": 0, "stray_stamps": 0}
+                       "stamp_resets": 0, "stray_stamps": 0,
+                       **{f"solved_by_{method}": 0 for method in SOLVER_METHODS}}
         self.stamps = StampGuard()
 
     def retune(self, changes: dict[str, Any]) -> None:
@@ -176,6 +181,7 @@ class MheNode(Node):
             level, text = OK, "waiting for valid residuals"
         elif result.status is SolveStatus.SOLVED:
             self.counts["solves"] += 1
+            self.counts[f"solved_by_{result.solved_by}"] += 1
             self.update_times_ms.append(result.update_time_ms)
             level, text = OK, "estimating"
         else:
