@@ -7,10 +7,11 @@
    given), its residuals and sensitivities from the residual core every 0.5 s, and
    mhe_node's default configuration (config/mhe_node.yaml: N = 50, four monotonic faults
    bounded to [0, 100] %), first with the four faults alone (p = 4), then with the three
-   wind-error columns as well (the node's default). The project's estimator runs it (the
-   whole `update` call, as the node makes it); the same QPs then go to PIQP (sparse, set up
-   once, `update(P, c)`), OSQP (same pattern, warm start, polish), quadprog (dense active
-   set, from scratch, exact) and Clarabel (interior point, from scratch). Each tolerant
+   wind-error columns as well (`estimate_wind_errors`, off by default). The project's
+   estimator runs it (the whole `update` call, as the node makes it); the same QPs then go
+   to PIQP (sparse, set up once, `update(P, c)`), OSQP (same pattern, warm start, polish),
+   quadprog (dense active set, from scratch, exact) and Clarabel (interior point, from
+   scratch). Each tolerant
    solver gets the loosest tolerance that reaches the project's deviation from the
    reference (Clarabel at 1e-12, polished on its active set; untimed) on the first updates,
    so that none works harder than the estimate needs. Per solver: its tolerance, median and
