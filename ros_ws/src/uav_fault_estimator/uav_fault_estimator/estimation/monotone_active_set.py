@@ -41,6 +41,11 @@ from uav_fault_estimator.estimation.qp_problem import WindowQP
 # it is instead of flipping back and forth.
 PRIMAL_TOLERANCE_PCT = 1e-9
 DUAL_TOLERANCE = 1e-12  # times the objective's scale (WindowQP.objective_scale)
+# Rounds before the caller's general solver takes over. The method can cycle where the
+# summed blocks couple many faults: on bench_mhe's synthetic p = 16 sequence 42 of 201
+# windows took more than 10 rounds and 7 more than 30 (each round about 0.06 ms at N = 50;
+# p = 4 and 8 took at most 7).
+MAX_ROUNDS = 30
 
 
 @dataclass
@@ -72,7 +77,7 @@ class MonotoneActiveSet:
     and max_rounds, after which `solve` gives up.
     """
 
-    def __init__(self, problem: WindowQP, max_rounds: int = 10) -> None:
+    def __init__(self, problem: WindowQP, max_rounds: int = MAX_ROUNDS) -> None:
         if not is_monotone(problem.increment_terms):
             raise ValueError("the active-set solver needs every fault monotonic increasing")
         self.problem = problem
