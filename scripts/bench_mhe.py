@@ -66,7 +66,7 @@ UPDATE_PERIOD_S = residual_update_period_s()  # residual_node's, as the node pub
 EPS = 1e-6  # absolute tolerance asked of every iterative solver
 ACTIVE_PCT = 1e-6  # an increment or a bound this close to its limit counts as active [%]
 BIG = 1e20  # "no bound" in a ProxSuite row
-REPEATS = 3  # passes over the same sequence per timing (see fastest)
+REPEATS = 7  # passes over the same sequence per timing (see fastest)
 
 
 def node_config(wind_errors: bool = False) -> EstimatorConfig:
@@ -137,8 +137,10 @@ def fastest(run: Callable[..., tuple], *arguments: Any, **keywords: Any) -> tupl
     """run(*arguments, **keywords) REPEATS times, each returning per-update times [ms]
     first: per update the fastest of its runs, with the last run's other outputs. The work
     of an update is the same in every run (same data, same warm starts), so the fastest is
-    its cost without what else shared the machine's cores at that moment (on this 2-core
-    VM a single pass's median moved by up to 2x between back-to-back runs)."""
+    its cost without what else shared the machine at that moment: on this 2-core VM the
+    median of single passes of the same work moved between 0.18 and 0.41 ms within a
+    minute, the faster and slower phases lasting a pass or more, so that three passes in a
+    row could all be slow."""
     runs = [run(*arguments, **keywords) for _ in range(REPEATS)]
     return (np.min([result[0] for result in runs], axis=0), *runs[-1][1:])
 
