@@ -42,8 +42,12 @@ def write_report(bag: Path, out: Path, scenario: str,
     # (global, and outside the flight's wall span)
     messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS), namespace)
     diagnostics = read_topics(bag, typestore, (report.DIAGNOSTICS_TOPIC,))
-    run = dataclasses.replace(report.run_from(messages, bag), cpu_s=report.node_cpu_s(
-        diagnostics[report.DIAGNOSTICS_TOPIC], namespace))
+    statuses = diagnostics[report.DIAGNOSTICS_TOPIC]
+    run = report.run_from(messages, bag)
+    run = dataclasses.replace(
+        run, cpu_s=report.node_cpu_s(statuses, namespace),
+        estimates=dataclasses.replace(
+            run.estimates, solver_method=report.solver_method(statuses, namespace)))
     metrics = report.run_metrics(run, scenario)
     out.mkdir(parents=True, exist_ok=True)
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2) + "\n")

@@ -85,6 +85,9 @@ def test_solver_figures_count_failures_but_not_waiting():
     with_cpu = dataclasses.replace(estimates, cpu_times_ms=estimates.solve_times_ms / 2)
     assert solver_metrics(with_cpu)["cpu_median_ms"] == pytest.approx(
         np.median(solved_times) / 2, abs=1e-3)
+    assert solver["name"] == "proxsuite"  # a recording from before mhe_node named it
+    named = dataclasses.replace(estimates, solver_method="active_set")
+    assert solver_metrics(named)["name"] == "active_set"
 
 
 @pytest.mark.timeout(30)

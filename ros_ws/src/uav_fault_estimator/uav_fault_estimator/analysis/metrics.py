@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uav_fault_estimator.estimation.estimator_config import SolverSettings
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 SETTLE_S = 20.0                 # metrics.json's settle_s: errors counted from here [s]
@@ -25,8 +26,10 @@ DETECTION_THRESHOLD_PCT = 2.0   # metrics.json's detection_threshold_pct [%]
 @dataclass(frozen=True)
 class EstimateSeries:
     """What mhe_node published: stamps (K,) [s], values (K, p) [%], statuses (K,), update
-    wall times (K,) [ms], the p fault names, and the updates' CPU times (K,) [ms] (None for
-    a recording made before they were published)."""
+    wall times (K,) [ms], the p fault names, the updates' CPU times (K,) [ms] (None for
+    a recording made before they were published), and the solver method it ran with
+    (estimator_config.SOLVER_METHODS; None for one made before mhe_node reported it, when
+    ProxSuite, the default, was the only one)."""
 
     names: Sequence[str]
     stamps_s: np.ndarray
@@ -34,6 +37,7 @@ class EstimateSeries:
     statuses: np.ndarray
     solve_times_ms: np.ndarray
     cpu_times_ms: np.ndarray | None = None
+    solver_method: str | None = None
 
 
 @dataclass(frozen=True)
@@ -100,12 +104,13 @@ def fault_metrics(estimates: EstimateSeries, seeded: SeededSeries, settle_s: flo
 
 
 def solver_metrics(estimates: EstimateSeries) -> dict:
-    """Solves (updates with a solution), their median, p99 and largest wall time, the
-    median and p99 of their CPU time (None when not recorded), failures (updates that did
-    not solve, other than waiting for data)."""
+    """The solver method's name, solves (updates with a solution), their median, p99 and
+    largest wall time, the median and p99 of their CPU time (None when not recorded),
+    failures (updates that did not solve, other than waiting for data)."""
     solved = estimates.statuses == SolveStatus.SOLVED
     failed = ~solved & (estimates.statuses != SolveStatus.WAITING)
-    summary = {"name": "proxsuite", "solves": int(solved.sum()), "failures": int(failed.sum())}
+    summary = {"name": estimates.solver_method or SolverSettings().method,
+               "solves": int(solved.sum()), "failures": int(failed.sum())}
     cpu = None if estimates.cpu_times_ms is None else estimates.cpu_times_ms[solved]
     for prefix, times, statistics in (("", estimates.solve_times_ms[solved], _TIME_STATISTICS),
                                       ("cpu_", cpu, _TIME_STATISTICS[:2])):

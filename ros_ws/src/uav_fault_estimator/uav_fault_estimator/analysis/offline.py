@@ -84,7 +84,8 @@ def fly_and_estimate(
     stamps_s = np.array(stamps)
     return (
         EstimateSeries(list(mhe["fault_names"]), stamps_s, np.array(values),
-                       np.array(statuses), np.array(times_ms), np.array(cpu_ms)),
+                       np.array(statuses), np.array(times_ms), np.array(cpu_ms),
+                       estimator.config.solver.method),
         SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
     )
 

@@ -23,6 +23,7 @@ from uav_fault_estimator.analysis.metrics import (
     solver_metrics,
 )
 from uav_fault_estimator.analysis.recording import WALL_S, RecordingError
+from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
 
 ESTIMATE_TOPIC = "/faults/estimate"
 SEEDED_TOPIC = "/faults/seeded"
@@ -105,6 +106,18 @@ def node_cpu_s(diagnostics: list, namespace: str = "") -> dict[str, float]:
                 first.setdefault(name, float(values[CPU_KEY]))
                 last[name] = float(values[CPU_KEY])
     return {name: last[name] - first[name] for name in sorted(last)}
+
+
+def solver_method(diagnostics: list, namespace: str = "") -> str | None:
+    """The solver method mhe_node in namespace reported on /diagnostics (its last status's
+    estimator_config.SOLVER_METHOD_KEY); None when it reported none."""
+    wanted, method = hardware_id(namespace), None
+    for array in diagnostics:
+        for status in array.status:
+            if status.hardware_id == wanted and status.name.rsplit("/", 1)[-1] == "mhe_node":
+                values = {item.key: item.value for item in status.values}
+                method = values.get(SOLVER_METHOD_KEY, method)
+    return method
 
 
 def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,

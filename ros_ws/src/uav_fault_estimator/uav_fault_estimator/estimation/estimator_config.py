@@ -49,6 +49,7 @@ class FaultConfig:
 # method for monotonic increasing faults (monotone_active_set.py; ProxSuite solves the
 # windows where it does not settle).
 SOLVER_METHODS = ("proxsuite", "active_set")
+SOLVER_METHOD_KEY = "solver_method"  # mhe_node's /diagnostics value naming its method
 
 
 @dataclass

@@ -27,6 +27,7 @@ from uav_sim.ros.node_tools import (
 )
 
 from uav_fault_estimator.estimation.estimator_config import (
+    SOLVER_METHOD_KEY,
     SOLVER_METHODS,
     config_from_parameters,
     noise_calibration,
@@ -191,6 +192,7 @@ class MheNode(Node):
         nuisance = {name: value for name, value in
                     zip(self.estimated, result.fault_pct, strict=True) if name not in self.names}
         self.diagnostics.update(level, text, {
+            SOLVER_METHOD_KEY: self.config.solver.method,
             **self.counts,
             **{f"{name}_mps": f"{value:.2f}" for name, value in nuisance.items()},
             "median_ms": f"{np.median(times):.3f}",
