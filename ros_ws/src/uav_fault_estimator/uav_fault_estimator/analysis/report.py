@@ -3,7 +3,7 @@ No ROS here: metrics.py computes the figures."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -97,27 +97,33 @@ def node_cpu_s(diagnostics: list, namespace: str = "") -> dict[str, float]:
     /diagnostics statuses (uav_sim.health.CPU_KEY): its last less its first, which leaves
     out the start-up before the first status (imports, JSBSim's loading), of the nodes in
     namespace ("" for none; the recorder's and other vehicles' left out)."""
-    wanted, first, last = hardware_id(namespace), {}, {}
-    for array in diagnostics:
-        for status in array.status:
-            values = {item.key: item.value for item in status.values}
-            if status.hardware_id == wanted and CPU_KEY in values:
-                name = status.name.rsplit("/", 1)[-1]
-                first.setdefault(name, float(values[CPU_KEY]))
-                last[name] = float(values[CPU_KEY])
+    first, last = {}, {}
+    for name, values in _node_statuses(diagnostics, namespace):
+        if CPU_KEY in values:
+            first.setdefault(name, float(values[CPU_KEY]))
+            last[name] = float(values[CPU_KEY])
     return {name: last[name] - first[name] for name in sorted(last)}
 
 
 def solver_method(diagnostics: list, namespace: str = "") -> str | None:
     """The solver method mhe_node in namespace reported on /diagnostics (its last status's
     estimator_config.SOLVER_METHOD_KEY); None when it reported none."""
-    wanted, method = hardware_id(namespace), None
+    method = None
+    for name, values in _node_statuses(diagnostics, namespace):
+        if name == "mhe_node":
+            method = values.get(SOLVER_METHOD_KEY, method)
+    return method
+
+
+def _node_statuses(diagnostics: list, namespace: str) -> Iterator[tuple[str, dict[str, str]]]:
+    """(node name, its key-value pairs) of every /diagnostics status of the nodes in
+    namespace, in the order they came."""
+    wanted = hardware_id(namespace)
     for array in diagnostics:
         for status in array.status:
-            if status.hardware_id == wanted and status.name.rsplit("/", 1)[-1] == "mhe_node":
-                values = {item.key: item.value for item in status.values}
-                method = values.get(SOLVER_METHOD_KEY, method)
-    return method
+            if status.hardware_id == wanted:
+                yield (status.name.rsplit("/", 1)[-1],
+                       {item.key: item.value for item in status.values})
 
 
 def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,

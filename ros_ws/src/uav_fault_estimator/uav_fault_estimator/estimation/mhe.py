@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from operator import attrgetter
 
 import numpy as np
 
@@ -104,7 +105,7 @@ class MovingHorizonEstimator:
         config.validate()
         current = self.config
         for name in ("horizon", "faults", "arrival_centre", "solver.method"):
-            if _attribute(config, name) != _attribute(current, name):
+            if attrgetter(name)(config) != attrgetter(name)(current):
                 raise ValueError(f"{name} shapes the estimator's QP: it changes only at a "
                                  "restart of the node")
         ratio = config.q_inv / self._q_inv
@@ -204,11 +205,3 @@ class MovingHorizonEstimator:
             solver_time_ms=outcome.solver_time_ms if outcome else 0.0,
             solved_by=outcome.solved_by if outcome else "",
         )
-
-
-def _attribute(config: EstimatorConfig, dotted: str) -> object:
-    """config's attribute at a dotted name ("solver.method")."""
-    value: object = config
-    for name in dotted.split("."):
-        value = getattr(value, name)
-    return value

@@ -145,8 +145,9 @@ class MonotoneActiveSet:
             value[ends[held[row]]] = bound_pct[held[row]]
         free = ~fixed
         if not free.all():
-            linear = linear[free] + hessian[free][:, fixed] @ value[fixed]
-            hessian = hessian[free][:, free]
+            free_rows = hessian[free]
+            linear = linear[free] + free_rows[:, fixed] @ value[fixed]
+            hessian = free_rows[:, free]
         if linear.size:
             _, solution, info = dposv(hessian, linear)
             if info != 0:  # not positive definite
