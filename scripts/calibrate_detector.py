@@ -23,19 +23,17 @@ import sys
 import time
 from pathlib import Path
 
-from uav_fault_estimator.analysis.offline import (
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S, DEFAULT_SETTLE_S
+from uav_fault_estimator.detection.calibration_file import calibration_to_dict
+from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.offline import (
     describe_flights,
     fault_free_flights,
     fly_on_grid_each,
     write_calibration,
 )
-from uav_fault_estimator.analysis.recording import flight_from_recording, project_typestore
-from uav_fault_estimator.detection.self_tuning import (
-    DEFAULT_SAMPLE_PERIOD_S,
-    DEFAULT_SETTLE_S,
-    calibrate,
-)
-from uav_sim.paths import default_parameters
+from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
 FIRST_SEED = 101
@@ -77,8 +75,8 @@ def main() -> int:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)
         return 1
     header += "# Valid for the sample period, forgetting factor and window below only.\n"
-    write_calibration(arguments.out, header, calibration, f"{len(flights)} flights",
-                      time.monotonic() - started)
+    write_calibration(arguments.out, header, calibration_to_dict(calibration),
+                      f"{len(flights)} flights", time.monotonic() - started)
     return 0
 
 

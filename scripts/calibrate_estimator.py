@@ -21,18 +21,18 @@ import sys
 import time
 from pathlib import Path
 
-from uav_fault_estimator.analysis.offline import (
-    describe_flights,
-    each_in_processes,
-    fault_free_flights,
-    fault_free_residuals,
-    write_calibration,
-)
 from uav_fault_estimator.estimation.noise_model import (
     AIR_DATA_ON_BOARD,
     CALIBRATION_FILE,
     SUITES,
     fit_noise,
+)
+from uav_fault_estimator.offline import (
+    describe_flights,
+    each_in_processes,
+    fault_free_flights,
+    fault_free_residuals,
+    write_calibration,
 )
 from uav_sim.scenario import SensorSuite
 
@@ -56,7 +56,7 @@ def main() -> int:
     header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
               f"flights per sensor suite of\n# {describe_flights(base)}.\n"
               "# Valid for residual_node's default parameters.\n")
-    write_calibration(arguments.out, header, calibration, f"{count} flights per suite",
+    write_calibration(arguments.out, header, calibration.to_dict(), f"{count} flights per suite",
                       time.monotonic() - started)
     return 0
 

@@ -44,7 +44,9 @@ from typing import Any
 
 import yaml
 from report import write_report
-from ros_processes import (
+from uav_common.message_fields import stamp_seconds
+from uav_common.package_data import default_parameters
+from uav_common.ros_processes import (
     SIM_TIME_ROS_ARGS,
     RosProcess,
     exit_status_text,
@@ -53,9 +55,7 @@ from ros_processes import (
     ros2_run_argv,
     stop_all,
 )
-from uav_fault_estimator.analysis.report import residual_update_period_s, table
-from uav_sim.paths import default_parameters
-from uav_sim.ros.messages import stamp_seconds
+from uav_fault_estimator.reporting.report import residual_update_period_s, table
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -114,8 +114,8 @@ class Progress:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
+        from uav_common.ros.node_tools import STREAM_QOS
         from uav_fault_msgs.msg import FaultEstimate
-        from uav_sim.ros.node_tools import STREAM_QOS
 
         self._rclpy = rclpy
         self.context = rclpy.Context()

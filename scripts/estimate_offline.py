@@ -21,8 +21,8 @@ import sys
 import time
 from pathlib import Path
 
-from uav_fault_estimator.analysis import report
-from uav_fault_estimator.analysis.offline import fly_and_estimate
+from uav_fault_estimator.offline import fly_and_estimate
+from uav_fault_estimator.reporting import report
 from uav_sim.scenario import (
     TURBULENCE_LEVELS,
     ScenarioError,

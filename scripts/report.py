@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""metrics.json (DESIGN.md) and the figures of a recorded run; the metrics as a table.
+"""metrics.json (docs/design.md) and the figures of a recorded run; the metrics as a table.
 
     python scripts/report.py BAG [--out DIR] [--scenario NAME] [--ns NS]
 
@@ -21,12 +21,8 @@ import json
 import sys
 from pathlib import Path
 
-from uav_fault_estimator.analysis import figures, report
-from uav_fault_estimator.analysis.recording import (
-    RecordingError,
-    project_typestore,
-    read_topics,
-)
+from uav_fault_estimator.recording.project_bag import RecordingError, project_typestore, read_topics
+from uav_fault_estimator.reporting import figures, report
 
 
 def write_report(bag: Path, out: Path, scenario: str,

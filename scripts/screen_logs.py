@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Screen flight logs with the self-tuning detector: calibrate it from fault-free logs of one
-airframe, then screen other logs of it for alarms (issue 17; README, "Your own flights").
+airframe, then screen other logs of it for alarms (docs/detector.md).
 
     python scripts/screen_logs.py calibrate FAULT_FREE_LOG... --airframe AIRFRAME.yaml \\
         --out CAL.yaml [--schedule auto|airspeed|none]
@@ -20,7 +20,7 @@ airspeeds span enough (self_tuning.MIN_SCHEDULE_SPAN_MPS), else a line saying wh
 schedule; airspeed: a schedule or refuse; none: no schedule.
 
 screen: per log into DIR: NAME.alarms.csv (the alarm intervals: start_s, end_s, channel,
-test, samples; also printed), NAME.png (the figure), NAME.json (analysis.screening's
+test, samples; also printed), NAME.png (the figure), NAME.json (flight_logs.screening's
 summary), and DIR/summary.json (the calibration, the settings and every log's summary).
 NAME is the log's file or folder name without its suffix.
 
@@ -39,26 +39,26 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from uav_fault_estimator.analysis.offline import write_calibration
-from uav_fault_estimator.analysis.screening import (
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.detection.calibration import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_SETTLE_S,
+    Calibration,
+)
+from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
+from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.flight_logs.airframe import Airframe, load_airframe
+from uav_fault_estimator.flight_logs.readers import log_paths
+from uav_fault_estimator.flight_logs.replay import LogReplay, load_replay
+from uav_fault_estimator.flight_logs.screening import (
     alarm_intervals,
     alarm_table,
     log_summary,
     plot_screening,
     write_alarm_csv,
 )
-from uav_fault_estimator.detection.self_tuning import (
-    DEFAULT_SAMPLE_PERIOD_S,
-    DEFAULT_SETTLE_S,
-    Calibration,
-    calibrate,
-    load_calibration,
-    run_detector,
-)
-from uav_fault_estimator.flight_logs.airframe import Airframe, load_airframe
-from uav_fault_estimator.flight_logs.readers import log_paths
-from uav_fault_estimator.flight_logs.replay import LogReplay, load_replay
-from uav_sim.paths import default_parameters
+from uav_fault_estimator.offline import write_calibration
 
 PROGRAM = "screen_logs.py"
 SCHEDULES = ("auto", "airspeed", "none")
@@ -132,8 +132,8 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
               + "".join(f"#   {log.source}\n" for log in logs.values())
               + "# Valid for the sample period, forgetting factor and window below only.\n")
     try:
-        write_calibration(arguments.out, header, calibration, f"{len(logs)} logs",
-                          time.monotonic() - started)
+        write_calibration(arguments.out, header, calibration_to_dict(calibration),
+                          f"{len(logs)} logs", time.monotonic() - started)
     except OSError as error:
         raise BadInputError(f"cannot write {arguments.out}: {error.strerror}") from None
 

@@ -1,15 +1,18 @@
-"""Session-wide test setup: a ROS domain of the run's own, DDS on loopback only."""
+"""Session-wide test setup: a ROS domain of the run's own, DDS on loopback only; the
+node tests' scenario files and watching node."""
 
 from __future__ import annotations
 
 import os
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from ros_graph import RosGraph
-from ros_processes import RosProcess, reserve_domain_id
+import yaml
+from helpers.ros_graph import RosGraph
+from uav_common.ros_processes import RosProcess, reserve_domain_id
+from uav_sim.scenario import default_scenario_path
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -55,3 +58,23 @@ def start_process(tmp_path: Path) -> Iterator:
     finally:
         for process in reversed(started):
             process.stop()
+
+
+@pytest.fixture
+def short_scenario(tmp_path) -> Callable[..., Path]:
+    """short_scenario(duration_s, **overrides): the default scenario cut short, as a file."""
+
+    def write(duration_s: float, **overrides) -> Path:
+        scenario = yaml.safe_load(default_scenario_path().read_text())
+        scenario.update(duration_s=duration_s, **overrides)
+        path = tmp_path / f"short_{len(list(tmp_path.glob('short_*')))}.yaml"
+        path.write_text(yaml.safe_dump(scenario))
+        return path
+
+    return write
+
+
+@pytest.fixture
+def graph(ros_graph):
+    yield ros_graph
+    ros_graph.unsubscribe_all()

@@ -16,7 +16,8 @@ what this project's users need, with ros2cli's (Jazzy) output and exit statuses:
     ros2 bag info BAG
 
 Errors end with one line on stderr and exit status 1. The pure parts (formatting) are in
-ros2cli_render.py, the parameter verbs in ros2cli_param.py.
+ros2cli_render.py, the graph queries in ros2cli_graph.py, the parameter verbs in
+ros2cli_param.py.
 """
 
 from __future__ import annotations
@@ -25,12 +26,22 @@ import argparse
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import ros2cli_param
 import yaml
+from ros2cli_graph import (
+    GRAPH_POLL_S,
+    absolute_name,
+    graph_node,
+    node_names,
+    settle_graph,
+    spin_for,
+    subscription_qos,
+    topic_types,
+    wait_for_topic_type,
+)
 from ros2cli_render import (
     DEFAULT_TRUNCATE_LENGTH,
     CliError,
@@ -45,18 +56,6 @@ from ros2cli_render import (
 
 __all__ = ["CliError", "field_value", "format_document", "main", "parser"]
 
-GRAPH_POLL_S = 0.1
-# Without ros2cli's daemon every query discovers the graph afresh. A query stops once the
-# graph (nodes, topics and types, services, endpoint counts) has not changed for
-# SETTLE_QUIET_S and at least SETTLE_MIN_S has passed, at the latest after --spin-time.
-# SETTLE_MIN_S: config/fastdds.xml makes every participant announce itself each 0.5 s, so a
-# participant that missed our initial announcements answers within about 0.5 s; measured
-# here (idle), the last change of the graph came 0.02-0.66 s after start, and with 0.6 s a
-# loaded test run once missed a node, hence two announcement periods. A `node list` took
-# 2.45-2.55 s before (2 s of spinning), 1.5-1.7 s now (Python and rclpy start-up: 0.45 s).
-SETTLE_MIN_S = 1.0
-SETTLE_QUIET_S = 0.3
-SETTLE_STEP_S = 0.02
 DEFAULT_SPIN_TIME_S = 2.0
 
 
@@ -80,131 +79,6 @@ def run(args: argparse.Namespace) -> int:
     path = find_executable(args.package, args.executable)
     os.execv(path, [path, *args.arguments])
     return 1  # not reached: execv does not return
-
-
-# --------------------------------------------------------------------------- graph
-@contextmanager
-def graph_node(use_sim_time: bool = False) -> Iterator[Any]:
-    """An rclpy node, hidden from `node list`, for graph queries and subscriptions."""
-    import rclpy
-    from rclpy.parameter import Parameter
-
-    rclpy.init()
-    node = rclpy.create_node(
-        f"_ros2cli_lite_{os.getpid()}",
-        start_parameter_services=False,
-        enable_rosout=False,
-        parameter_overrides=[Parameter("use_sim_time", value=use_sim_time)],
-    )
-    try:
-        yield node
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-
-
-def spin_for(node: Any, duration_s: float) -> None:
-    """Process callbacks and discovery for `duration_s` of wall time."""
-    import rclpy
-    from rclpy.executors import ExternalShutdownException
-
-    deadline = time.monotonic() + duration_s
-    try:
-        while (left := deadline - time.monotonic()) > 0:
-            rclpy.spin_once(node, timeout_sec=min(left, GRAPH_POLL_S))
-    except ExternalShutdownException as error:  # rclpy's SIGINT handler shut the context down
-        raise KeyboardInterrupt from error
-
-
-def graph_snapshot(node: Any) -> tuple:
-    """Everything a graph query prints, to tell when discovery has settled."""
-    topics = sorted((name, tuple(types)) for name, types in node.get_topic_names_and_types())
-    return (
-        tuple(sorted(node.get_node_names_and_namespaces())),
-        tuple(topics),
-        tuple(sorted(name for name, _types in node.get_service_names_and_types())),
-        tuple((node.count_publishers(name), node.count_subscribers(name)) for name, _ in topics),
-    )
-
-
-def settle_graph(node: Any, max_s: float, ready: Callable[[], bool] = lambda: True) -> float:
-    """Spin until discovery has settled (see SETTLE_MIN_S) and ready() holds, or max_s; the
-    time spent."""
-    started = time.monotonic()
-    last, changed = None, started
-    while (elapsed := time.monotonic() - started) < max_s:
-        spin_for(node, SETTLE_STEP_S)
-        snapshot = graph_snapshot(node)
-        if snapshot != last:
-            last, changed = snapshot, time.monotonic()
-        elif (
-            elapsed >= SETTLE_MIN_S
-            and time.monotonic() - changed >= SETTLE_QUIET_S
-            and ready()
-        ):
-            break
-    return time.monotonic() - started
-
-
-def absolute_name(name: str) -> str:
-    """Resolve a name relative to the root namespace, as ros2cli does."""
-    return name if name.startswith("/") else "/" + name
-
-
-def full_name(namespace: str, name: str) -> str:
-    return f"{namespace.rstrip('/')}/{name}"
-
-
-def node_names(node: Any, hidden: bool = False) -> list[str]:
-    """Fully qualified names of the nodes in the graph (ours is hidden)."""
-    return [
-        full_name(namespace, name)
-        for name, namespace in node.get_node_names_and_namespaces()
-        if hidden or not name.startswith("_")
-    ]
-
-
-def service_names(node: Any) -> set[str]:
-    return {name for name, _types in node.get_service_names_and_types()}
-
-
-def topic_types(node: Any) -> dict[str, list[str]]:
-    """Every topic in the graph with its type names."""
-    return dict(node.get_topic_names_and_types())
-
-
-def wait_for_topic_type(node: Any, topic: str, deadline: float | None) -> str | None:
-    """Type name of `topic`, waiting until some publisher announces it; None at the deadline."""
-    announced = False
-    warn_at = time.monotonic() + SETTLE_MIN_S  # not before discovery had its chance
-    while True:
-        types = topic_types(node).get(topic)
-        if types:
-            return types[0]
-        if deadline is not None and time.monotonic() >= deadline:
-            return None
-        if not announced and time.monotonic() >= warn_at:
-            print(f"WARNING: topic [{topic}] does not appear to be published yet", file=sys.stderr)
-            announced = True
-        spin_for(node, GRAPH_POLL_S)
-
-
-def subscription_qos(node: Any, topic: str) -> Any:
-    """A QoS that matches every publisher of `topic` (ros2cli's choice for echo and hz)."""
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
-    publishers = node.get_publishers_info_by_topic(topic)
-    reliable = bool(publishers) and all(
-        info.qos_profile.reliability == ReliabilityPolicy.RELIABLE for info in publishers
-    )
-    transient = bool(publishers) and all(
-        info.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for info in publishers
-    )
-    return QoSProfile(
-        depth=10,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE,
-    )
 
 
 # ---------------------------------------------------------------------------- echo

@@ -12,6 +12,7 @@ import sys
 from typing import Any
 
 import yaml
+from ros2cli_graph import graph_node, node_names, service_names, settle_graph
 from ros2cli_render import CliError
 
 SERVICE_WAIT_S = 5.0
@@ -75,7 +76,6 @@ def absolute_node_name(name: str) -> str:
 
 def wait_for_node(node: Any, name: str, timeout_s: float) -> None:
     """Wait until the node is in the graph (ros2node's wait_for_node), else 'Node not found'."""
-    from ros2cli_lite import node_names, settle_graph
 
     settle_graph(node, timeout_s, ready=lambda: name in node_names(node, hidden=True))
     if name not in node_names(node, hidden=True):
@@ -122,7 +122,6 @@ def get_values(node: Any, node_name: str, names: list[str]) -> list[Any]:
 def param_list(args: argparse.Namespace) -> int:
     """`ros2 param list [NODE]`: names, indented, under each node's name when none is given."""
     from rcl_interfaces.srv import DescribeParameters
-    from ros2cli_lite import graph_node, node_names, service_names, settle_graph
 
     with graph_node() as node:
         if args.node_name:
@@ -152,7 +151,6 @@ def param_list(args: argparse.Namespace) -> int:
 
 def param_get(args: argparse.Namespace) -> int:
     """`ros2 param get NODE NAME`: `Double value is: 4.0`; an undeclared name is an error."""
-    from ros2cli_lite import graph_node
 
     target = absolute_node_name(args.node_name)
     with graph_node() as node:
@@ -170,7 +168,6 @@ def param_set(args: argparse.Namespace) -> int:
     from rcl_interfaces.msg import Parameter
     from rcl_interfaces.srv import SetParameters
     from rclpy.parameter import get_parameter_value
-    from ros2cli_lite import graph_node
 
     target = absolute_node_name(args.node_name)
     parameter = Parameter(name=args.parameter_name, value=get_parameter_value(args.value))
@@ -189,7 +186,6 @@ def param_set(args: argparse.Namespace) -> int:
 
 def param_dump(args: argparse.Namespace) -> int:
     """`ros2 param dump NODE`: the node's parameters as a parameters file, on stdout."""
-    from ros2cli_lite import graph_node
 
     target = absolute_node_name(args.node_name)
     with graph_node() as node:

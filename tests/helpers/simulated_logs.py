@@ -27,8 +27,9 @@ import yaml
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Writer as Ros1Writer
 from rosbags.typesys import Stores, get_typestore
-from uav_fault_estimator.analysis.recording import Recording, project_typestore
-from uav_fault_estimator.detection.self_tuning import DEFAULT_SAMPLE_PERIOD_S, DetectorFlight
+from uav_common.channels import AIR_DATA_CHANNELS, AIR_DATA_FIELDS, CONTROL_CHANNELS, STATE_CHANNELS
+from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
+from uav_fault_estimator.detection.detector import DetectorFlight
 from uav_fault_estimator.flight_logs.axes import body_rates_frd, quaternions_from_euler
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
@@ -44,11 +45,14 @@ from uav_fault_estimator.flight_logs.topics import (
     STATE_FIELDS,
     register_mavros_types,
 )
-from uav_sim.channels import AIR_DATA_CHANNELS, AIR_DATA_FIELDS, CONTROL_CHANNELS, STATE_CHANNELS
+from uav_fault_estimator.recording.project_bag import Recording, project_typestore
 from uav_sim.scenario import Scenario
 from uav_sim.simulation import Simulation
 
-FIXTURE_AIRFRAME = Path(__file__).resolve().parent.parent / "flight_logs" / "fixture_airframe.yaml"
+from helpers.repo import REPO_ROOT
+
+FIXTURE_AIRFRAME = (REPO_ROOT / "tests" / "uav_fault_estimator" / "flight_logs"
+                    / "fixture_airframe.yaml")
 SENSOR_RATE_HZ = 120.0  # the simulation's sample grid: the log instants are picked from it
 
 

@@ -11,7 +11,7 @@ import time
 import pytest
 from helpers.echo_output import echo_documents
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, STAMP_NANOSEC, STAMP_SEC, topic_of
-from ros_processes import RosProcess
+from uav_common.ros_processes import RosProcess
 
 pytestmark = pytest.mark.integration
 
@@ -43,6 +43,7 @@ def assert_close(printed, expected, path: str) -> None:
         assert printed == expected, (path, printed, expected)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_echo_once_prints_every_message_type(sample_publisher, start_process) -> None:
     echoes = {
@@ -66,6 +67,7 @@ def test_echo_once_prints_every_message_type(sample_publisher, start_process) ->
         print(f"{name}: {len(document) - 1} fields echoed and checked")
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_echo_field_prints_only_that_field(sample_publisher) -> None:
     result = run_cli(
@@ -104,6 +106,7 @@ def test_echo_unknown_field_is_one_clear_error(sample_publisher) -> None:
     assert last_line == "Invalid field 'residual.nope': no field 'nope'"
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_topic_list_info_and_node_list(sample_publisher) -> None:
     listing = run_cli("topic", "list", "-t")
@@ -121,6 +124,7 @@ def test_topic_list_info_and_node_list(sample_publisher) -> None:
     assert not any(line.startswith("/_") for line in nodes.stdout.splitlines())
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_topic_hz_reports_the_publish_rate(sample_publisher, start_process) -> None:
     rate = start_process(["ros2", "topic", "hz", topic_of("AircraftState")], "hz")
@@ -133,6 +137,7 @@ def test_topic_hz_reports_the_publish_rate(sample_publisher, start_process) -> N
     assert "std dev:" in rate.output() and "Traceback" not in rate.output()
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_echo_of_a_missing_topic_waits_like_ros2cli(start_process, ros_graph) -> None:
     echo = start_process(["ros2", "topic", "echo", "no_such_topic"], "echo_waiting")
@@ -142,6 +147,7 @@ def test_echo_of_a_missing_topic_waits_like_ros2cli(start_process, ros_graph) ->
     assert echo.stop() == 0 and "Traceback" not in echo.output()
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_echo_once_with_timeout_of_a_missing_topic_fails_clearly(ros_graph) -> None:
     started = time.monotonic()

@@ -12,12 +12,13 @@ from pathlib import Path
 import pytest
 import yaml
 from helpers.echo_output import echo_documents
+from helpers.repo import REPO_ROOT
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, topic_of
-from ros_processes import RosProcess, ros2_run_argv
+from uav_common.ros_processes import RosProcess, ros2_run_argv
 
 pytestmark = pytest.mark.integration
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = REPO_ROOT
 MHE_CONFIG = REPO / "ros_ws/src/uav_fault_estimator/config/mhe_node.yaml"
 PUBLISHER = [sys.executable, "tests/helpers/sample_publisher.py"]
 CLOCK_PUBLISHER = [sys.executable, "tests/tools/clock_publisher.py"]
@@ -48,6 +49,7 @@ def sample_publisher(start_process, ros_graph) -> RosProcess:
 
 
 # ------------------------------------------------------------------------------ param
+@pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_param_list_get_dump_show_the_config_values(mhe_node) -> None:
     defaults = mhe_defaults()
@@ -86,6 +88,7 @@ def test_param_list_get_dump_show_the_config_values(mhe_node) -> None:
     assert dumped["use_sim_time"] is False
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
     result = run_cli("param", "set", "/mhe_node", "horizon", "60")
@@ -102,6 +105,7 @@ def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
     print("param set answers:", answer, "|", wrong.stderr.strip())
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
     missing_node = run_cli("param", "get", "/no_such_node", "horizon", "--spin-time", "1")
@@ -114,6 +118,7 @@ def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
 
 
 # ----------------------------------------------------------------------- node info
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_node_info_lists_every_endpoint_section(mhe_node) -> None:
     result = run_cli("node", "info", "/mhe_node")
@@ -143,6 +148,7 @@ def test_node_info_lists_every_endpoint_section(mhe_node) -> None:
 
 
 # ---------------------------------------------------------------------- topic info -v
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_topic_info_verbose_prints_each_endpoint(mhe_node) -> None:
     result = run_cli("topic", "info", "-v", "/faults/estimate")
@@ -172,6 +178,7 @@ def test_topic_info_verbose_prints_each_endpoint(mhe_node) -> None:
 
 
 # ---------------------------------------------------------------------------- pub
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_topic_pub_once_reaches_an_echo(start_process, ros_graph) -> None:
     echo = start_process(["ros2", "topic", "echo", "/cli_pub_test", "--once"], "echo_pub")
@@ -211,6 +218,7 @@ def test_topic_pub_times_and_bad_values(ros_graph) -> None:
 
 
 # ------------------------------------------------------------------ echo options
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_echo_no_arr_and_truncate_length(sample_publisher) -> None:
     topic = topic_of("FaultEstimate")
@@ -228,6 +236,7 @@ def test_echo_no_arr_and_truncate_length(sample_publisher) -> None:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_echo_timeout_ends_with_status_0_like_ros2cli(sample_publisher, mhe_node) -> None:
     started = time.monotonic()
@@ -239,6 +248,7 @@ def test_echo_timeout_ends_with_status_0_like_ros2cli(sample_publisher, mhe_node
 
 
 # ------------------------------------------------------------------------------- hz
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_hz_times_on_wall_time_or_on_clock_with_use_sim_time(start_process, ros_graph) -> None:
     start_process(CLOCK_PUBLISHER, "clock_publisher")
@@ -257,6 +267,7 @@ def test_hz_times_on_wall_time_or_on_clock_with_use_sim_time(start_process, ros_
 
 
 # ------------------------------------------------------------------ graph settling
+@pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_graph_queries_return_once_discovery_settles(sample_publisher, mhe_node) -> None:
     durations = []
@@ -300,7 +311,7 @@ def test_interface_show_prints_the_definition_with_nested_types() -> None:
 
 @pytest.mark.timeout(30)
 def test_bag_info_of_a_recording(tmp_path) -> None:
-    from uav_fault_estimator.analysis.recording import Recording, project_typestore
+    from uav_fault_estimator.recording.project_bag import Recording, project_typestore
 
     typestore = project_typestore()
     clock_type = typestore.types["rosgraph_msgs/msg/Clock"]

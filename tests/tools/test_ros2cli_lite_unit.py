@@ -1,12 +1,12 @@
 """Formatting and parsing of the project's `ros2` command, without a ROS graph."""
 
 import sys
-from pathlib import Path
 
 import pytest
 import yaml
+from helpers.repo import REPO_ROOT
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
+sys.path.insert(0, str(REPO_ROOT / "tools"))
 
 from ros2cli_lite import CliError, field_value, format_document, parser
 from ros2cli_param import dump_text, get_line

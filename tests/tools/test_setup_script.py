@@ -10,8 +10,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-
-REPO_ROOT = Path(__file__).resolve().parents[2]
+from helpers.repo import REPO_ROOT
 
 
 def path_without(hidden: re.Pattern[str], bin_dir: Path) -> str:

@@ -30,7 +30,7 @@ MPS_PER_KT = 1852.0 / 3600.0
 SURFACE_LIMIT_RAD = 0.5236
 FLAP_LIMIT_RAD = 0.3491
 
-# Fault properties: percent change of the named coefficient (DESIGN.md).
+# Fault properties: percent change of the named coefficient (docs/design.md).
 FAULT_PROPERTY = "fault/{name}-pct"
 # Propeller force and moment injected by the prediction model (aircraft XML).
 MODEL_THRUST_LBF = "external_reactions/propeller_model/magnitude"

@@ -13,10 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
 
-from uav_sim.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
-
-# (low, high) per channel, in uav_sim.channels order and units.
+# (low, high) per channel, in uav_common.channels order and units.
 STATE_BOUNDS: dict[str, tuple[float, float]] = {
     # Angles [rad]: the range of either wrapping convention (-pi..pi or 0..2 pi), with room
     # for sensor noise (a heading of 0 reads 6.285 rad as often as 0.001).

@@ -1,4 +1,4 @@
-"""Scenario files (DESIGN.md schema): load, check every key, and fail with one clear message.
+"""Scenario files (docs/design.md schema): load, check every key, and fail with one clear message.
 
 A scenario names the flight (start, waypoints, duration), the wind and turbulence, the
 sensors on board, the faults seeded into the aircraft and the sensor dropouts of the state
@@ -13,9 +13,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from uav_sim.channels import AIR_DATA_CHANNELS, DROPOUT_CHANNELS, FAULT_NAMES
+from uav_common.channels import AIR_DATA_CHANNELS, DROPOUT_CHANNELS, FAULT_NAMES
+from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
+
 from uav_sim.paths import scenarios_dir
-from uav_sim.strict_yaml import FileKind, Reader, is_number, load_yaml
 
 # from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
 # the others: JSBSim's MIL-HDBK-1797 presets (uav_sim.wind).

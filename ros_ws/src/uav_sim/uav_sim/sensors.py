@@ -18,8 +18,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
 
-from uav_sim.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
 from uav_sim.frames import EARTH_RADIUS_M
 
 
@@ -126,7 +126,7 @@ class SensorModel:
 
     def measure(self, state: np.ndarray, controls: np.ndarray,
                 air_data: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Measured (state, controls, air data) of the true ones (arrays in uav_sim.channels
+        """Measured (state, controls, air data) of the true ones (arrays in uav_common.channels
         order); without noise, the true arrays themselves."""
         if not self.noise:
             return state, controls, air_data

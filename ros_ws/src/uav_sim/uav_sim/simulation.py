@@ -3,7 +3,7 @@
 `Simulation(scenario)` trims the aircraft at the scenario's start, then `step()` advances
 one sensor period and returns a `Sample`: the measured state, controls and air data (through
 the sensor model), the filtered wind, the seeded faults and the true values, as arrays in the
-channel orders of uav_sim.channels. No ROS here.
+channel orders of uav_common.channels. No ROS here.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import jsbsim
 import numpy as np
+from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 
 from uav_sim.aircraft import (
     JSBSIM_DT_S,
@@ -23,7 +24,6 @@ from uav_sim.aircraft import (
     set_faults,
 )
 from uav_sim.autopilot import Autopilot, FlightState
-from uav_sim.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.frames import north_east_m
 from uav_sim.guidance import WaypointGuidance
 from uav_sim.propeller import Propeller

@@ -8,9 +8,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from uav_sim.channels import PAPER_FAULT_NAMES
+from uav_common.channels import PAPER_FAULT_NAMES
 
-from uav_fault_estimator.estimation.fault_models import SCALE_PARAMETER, FaultModel, make_model
+from uav_fault_estimator.estimation.fault_models import FaultModel, make_model
 from uav_fault_estimator.estimation.monotone_active_set import is_monotone
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
 from uav_fault_estimator.estimation.qp_problem import WindowQP
@@ -148,6 +148,18 @@ def noise_calibration(parameters: Mapping[str, Any]) -> NoiseCalibration:
         raise ValueError(f"noise_variance_factor must be positive, got "
                          f"{parameters['noise_variance_factor']}")
     return load_noise_calibration(parameters["noise_calibration_file"])
+
+
+# The one scale parameter of each fault model [%/sample] that mhe_node's flat
+# fault_model_scales_pct sets (the models' own keyword names, fault_models.py).
+SCALE_PARAMETER: dict[str, str | None] = {
+    "monotonic": "lambda_pct",
+    "monotonic_decreasing": "lambda_pct",
+    "random_walk": "sigma",
+    "uniform": "half_width_pct",
+    "laplacian": "scale_pct",
+    "constant": None,
+}
 
 
 def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> EstimatorConfig:

@@ -129,15 +129,6 @@ MODEL_CLASSES: dict[str, type] = {
     "laplacian": LaplacianIncrements,
     "constant": Constant,
 }
-# The one scale parameter of each model [%/sample], as a node's flat parameter list sets it.
-SCALE_PARAMETER: dict[str, str | None] = {
-    "monotonic": "lambda_pct",
-    "monotonic_decreasing": "lambda_pct",
-    "random_walk": "sigma",
-    "uniform": "half_width_pct",
-    "laplacian": "scale_pct",
-    "constant": None,
-}
 
 
 def make_model(name: str, **params: float | bool) -> FaultModel:

@@ -19,9 +19,10 @@ import numpy as np
 from uav_fault_estimator.estimation.arrival_cost import ArrivalCost, increment_prior
 from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
 from uav_fault_estimator.estimation.monotone_active_set import MonotoneActiveSet
-from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver, SolveOutcome
+from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
 from uav_fault_estimator.estimation.solve_status import SolveStatus
+from uav_fault_estimator.estimation.solvers import SolveOutcome, WindowSolver, first_solution
 
 
 @dataclass
@@ -75,6 +76,9 @@ class MovingHorizonEstimator:
         self.solver = ProxQPSolver(self.problem, config.solver)
         self.active_set = (MonotoneActiveSet(self.problem)
                            if config.solver.method == "active_set" else None)
+        # Tried in order: the active set where configured, ProxSuite for what it gives up.
+        self.solvers: tuple[WindowSolver, ...] = (
+            (self.solver,) if self.active_set is None else (self.active_set, self.solver))
         self.arrival = ArrivalCost(
             self._coefficients, self._increments[:, 0], self._increments[:, 1],
             config.prior_pct, np.diag(config.r_diag_pct2), config.arrival_inflation,
@@ -157,16 +161,9 @@ class MovingHorizonEstimator:
         return self._result(outcome.status, outcome, start)
 
     def _solve(self) -> SolveOutcome:
-        """This window's QP by the active-set method when configured and it settles, else
-        by ProxSuite; both from the previous solution, shifted."""
-        if self.active_set is not None:
-            start = time.perf_counter()
-            solution = self.active_set.solve(self._x[self.problem.f_index])
-            if solution is not None:
-                return SolveOutcome(solution.x, self._y_dual, solution.z, SolveStatus.SOLVED,
-                                    solution.rounds, (time.perf_counter() - start) * 1e3,
-                                    "active_set")
-        return self.solver.solve(self._x, self._y_dual, self._z_dual)
+        """This window's QP by the first of the solvers that settles, from the previous
+        solution, shifted."""
+        return first_solution(self.solvers, self._x, self._y_dual, self._z_dual)
 
     def _push_sample(self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None,
                      q_inv: np.ndarray) -> bool:

@@ -19,15 +19,15 @@ fixed, else 0), and the upper bound's multiplier is λ_k(T-1). The primal-dual a
 (Hintermüller, Ito & Kunisch, SIAM J. Optim. 13(3), 2002) then fixes what is violated and
 releases what has a negative multiplier, until the set repeats: the point is then a KKT
 point of the QP, exact to the dense solve. Started from the previous window's solution,
-shifted, it repeats after 1-5 rounds on the benchmark's windows (README, Performance).
+shifted, it repeats after a few rounds on the benchmark's windows (docs/results.md).
 
 Written by hand because no reachable library solves this structure: ProxSuite, PIQP and
-OSQP treat the QP as general; with them the estimator's update takes 0.30-0.38 ms in the
-benchmark, with this 0.19 ms.
+OSQP treat the QP as general, and take longer a window (docs/results.md).
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -36,6 +36,8 @@ from scipy.linalg.lapack import dposv  # Cholesky and solve in one LAPACK call
 
 from uav_fault_estimator.estimation.fault_models import IncrementTerms
 from uav_fault_estimator.estimation.qp_problem import WindowQP
+from uav_fault_estimator.estimation.solve_status import SolveStatus
+from uav_fault_estimator.estimation.solvers import SolveOutcome
 
 # Below these a primal violation or a negative multiplier is round-off, not a change of the
 # active set: a degenerate constraint (increment and multiplier both 0) is then left where
@@ -75,8 +77,11 @@ class MonotoneActiveSet:
     row τ = 1 … T-1 the increment into stage τ held at 0, row T the upper bound on f(T-1);
     `multiplier` and `slack` have the same layout. Inputs at construction: the problem (its
     pattern, bounds and constraint rows; ValueError if a fault is not monotonic increasing)
-    and max_rounds, after which `solve` gives up.
+    and max_rounds, after which `solve` gives up. A solvers.WindowSolver through
+    `solve`; `solve_faults` is the method itself.
     """
+
+    name = "active_set"
 
     def __init__(self, problem: WindowQP, max_rounds: int = MAX_ROUNDS) -> None:
         if not is_monotone(problem.increment_terms):
@@ -91,7 +96,17 @@ class MonotoneActiveSet:
         self._open = np.ones((stages, p), dtype=bool)  # increments not held, then the end
         self._slack = np.zeros((stages + 1, p))
 
-    def solve(self, guess_pct: np.ndarray) -> ActiveSetSolution | None:
+    def solve(self, x0: np.ndarray, y0: np.ndarray, _z0: np.ndarray) -> SolveOutcome | None:
+        """solvers.WindowSolver: the window from the active set of x0's faults; the
+        equality multipliers y0 are passed through (the window QP has none of its own)."""
+        start = time.perf_counter()
+        solution = self.solve_faults(x0[self.problem.f_index])
+        if solution is None:
+            return None
+        return SolveOutcome(solution.x, y0, solution.z, SolveStatus.SOLVED, solution.rounds,
+                            (time.perf_counter() - start) * 1e3, self.name)
+
+    def solve_faults(self, guess_pct: np.ndarray) -> ActiveSetSolution | None:
         """The QP's solution for the problem's current H and g, starting from the active set
         of guess_pct (T, p) [%]; None when the rounds run out or a reduced system is not
         positive definite (a direction without data: the caller's general solver decides)."""

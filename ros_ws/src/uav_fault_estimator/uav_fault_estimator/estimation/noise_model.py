@@ -9,7 +9,7 @@ the estimator's Q is the variance times `variance_factor`, one factor for both s
 correlation after F_a (about exp(-0.5 / 4) = 0.88) means fewer independent samples than the
 window holds; the factor stands for that (the AR(1) white-equivalent (1 + rho)/(1 - rho) =
 16 would be the factor for a constant fault; the shipped 4 was tuned on the default
-scenario, README). No ROS here.
+scenario, docs/estimator.md). No ROS here.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from uav_sim.paths import config_path
+from uav_common.package_data import config_path
 
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 

@@ -1,7 +1,7 @@
 """The prediction model phi: the Aerosonde's accelerations at a measured state.
 
 Embedded-estimation paper, eq. 6: a_hat = phi(p, v, u, zeta, w_hat | f). The model is the
-JSBSim Aerosonde the simulator flies (uav_sim's aircraft definition, DESIGN.md's one source
+JSBSim Aerosonde the simulator flies (uav_sim's aircraft definition, one source (docs/design.md)
 of truth), evaluated with `run_ic()`, which computes the accelerations of a given state
 without integrating. Per evaluation:
 
@@ -30,6 +30,7 @@ from typing import Any
 
 import jsbsim
 import numpy as np
+from uav_common.channels import CONTROL_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.aircraft import (
     BODY_ACCELERATIONS,
     EFFECTIVE_THROTTLE,
@@ -44,7 +45,6 @@ from uav_sim.aircraft import (
     create_fdm,
     set_faults,
 )
-from uav_sim.channels import CONTROL_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
 
@@ -93,7 +93,7 @@ class AircraftPredictor:
     ) -> np.ndarray:
         """Accelerations (6,) at state (14,), controls (7,) and filtered wind [m/s] (3,).
 
-        Orders and units are those of uav_sim.channels; the output is described in the
+        Orders and units are those of uav_common.channels; the output is described in the
         module docstring. Every input must be finite.
         """
         fdm = self.fdm

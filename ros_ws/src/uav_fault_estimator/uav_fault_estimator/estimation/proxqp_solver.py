@@ -8,12 +8,10 @@
   enforced stiffly at once and most updates need no penalty update (a refactorisation
   whose cost grows faster than N).
 - Ruiz preconditioning computed on the first window only; two iterative refinement steps.
-Why each, as measured: the README's estimator section ("Why the solver is set up so").
+Why each, as measured: docs/estimator.md.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 from proxsuite import proxqp
@@ -21,6 +19,7 @@ from proxsuite import proxqp
 from uav_fault_estimator.estimation.estimator_config import SolverSettings
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.solve_status import SolveStatus
+from uav_fault_estimator.estimation.solvers import SolveOutcome
 
 WARM_START_MU_IN = 1e-5
 ITERATIVE_REFINEMENT_STEPS = 2
@@ -34,23 +33,12 @@ _STATUS_OF = {
 }
 
 
-@dataclass
-class SolveOutcome:
-    """One solve: primal x, multipliers y (equalities) and z (inequalities, ProxSuite's
-    sign convention), status, iterations, the solver's own run time [ms] and which solver
-    (estimator_config.SOLVER_METHODS)."""
-
-    x: np.ndarray
-    y: np.ndarray
-    z: np.ndarray
-    status: SolveStatus
-    iterations: int
-    solver_time_ms: float
-    solved_by: str = "proxsuite"
-
 
 class ProxQPSolver:
-    """Holds one ProxSuite sparse QP for a WindowQP; `solve` pushes the new H and g."""
+    """Holds one ProxSuite sparse QP for a WindowQP; `solve` pushes the new H and g. A
+    solvers.WindowSolver that always answers."""
+
+    name = "proxsuite"
 
     def __init__(self, problem: WindowQP, settings: SolverSettings) -> None:
         self.problem = problem
@@ -116,5 +104,6 @@ class ProxQPSolver:
             status=status,
             iterations=int(results.info.iter),
             solver_time_ms=results.info.run_time * 1e-3,
+            solved_by=self.name,
         )
 

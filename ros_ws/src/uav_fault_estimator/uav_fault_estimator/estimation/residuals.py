@@ -40,7 +40,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from uav_sim.channels import STATE_CHANNELS
+from uav_common.channels import STATE_CHANNELS
 from uav_sim.filters import LowPass
 from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
 

@@ -1,7 +1,7 @@
 """The airframe file: how a log's raw actuator outputs become the detector's surface
-deflections, and what else a log does not say about the aircraft (issue 17).
+deflections, and what else a log does not say about the aircraft.
 
-A YAML file, read strictly like a scenario (uav_sim.strict_yaml): an unknown or missing
+A YAML file, read strictly like a scenario (uav_common.strict_yaml): an unknown or missing
 key, a wrong type or an out-of-range value stops with one AirframeError line naming the
 file and the key. config/airframes/aerosonde_sim.yaml is a commented example.
 
@@ -50,7 +50,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from uav_sim.strict_yaml import FileKind, Reader, load_yaml
+from uav_common.strict_yaml import FileKind, Reader, load_yaml
 
 from uav_fault_estimator.flight_logs.axes import AXES
 from uav_fault_estimator.flight_logs.streams import (

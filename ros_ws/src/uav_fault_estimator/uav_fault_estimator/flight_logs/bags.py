@@ -19,7 +19,6 @@ from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag1 import ReaderError as Ros1ReaderError
 from rosbags.rosbag2 import ReaderError as Ros2ReaderError
 
-from uav_fault_estimator.analysis.recording import project_typestore
 from uav_fault_estimator.flight_logs.streams import FlightLog
 from uav_fault_estimator.flight_logs.topics import (
     MEANINGS,
@@ -30,6 +29,7 @@ from uav_fault_estimator.flight_logs.topics import (
     padded_rows,
     register_mavros_types,
 )
+from uav_fault_estimator.recording.project_bag import project_typestore
 
 # What a damaged or foreign file raises in rosbags (besides its own errors): the file
 # system's and its parsers' on bytes that are not a bag.

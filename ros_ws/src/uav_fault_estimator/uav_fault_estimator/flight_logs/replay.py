@@ -1,4 +1,4 @@
-"""A flight log as the streams the project's nodes take, on the detector's grid (issue 17):
+"""A flight log as the streams the project's nodes take, on the detector's grid:
 what log_replay_node publishes, so that detector_node runs unchanged on a real flight. No
 ROS here.
 
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from uav_sim.channels import AIR_DATA_CHANNELS
+from uav_common.channels import AIR_DATA_CHANNELS
 
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log

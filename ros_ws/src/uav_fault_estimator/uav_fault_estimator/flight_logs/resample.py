@@ -1,10 +1,10 @@
-"""Asynchronous log streams onto the detector's sample grid (issue 17).
+"""Asynchronous log streams onto the detector's sample grid.
 
 The detector takes state and controls with one stamp, on whole multiples of its
 calibration's sample_period_s (0.2 s); a log's streams come at their own rates and instants
 (rates at 2.5-250 Hz, servo outputs at 3-50 Hz, airspeed at 10 Hz). Each grid point t takes
 the stream's two neighbouring samples, the last at or before t and the first at or after it
-(a sample within uav_sim.sample_grid.GRID_TOLERANCE_S of t counts as at t: stamps rounded to
+(a sample within uav_common.sample_grid.GRID_TOLERANCE_S of t counts as at t: stamps rounded to
 the microsecond), and:
 
 - every stream is interpolated linearly between them: body rates, attitude and airspeed
@@ -33,10 +33,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from uav_sim.channels import CONTROL_CHANNELS, STATE_CHANNELS
-from uav_sim.sample_grid import GRID_TOLERANCE_S
+from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.sample_grid import GRID_TOLERANCE_S
 
-from uav_fault_estimator.detection.self_tuning import DetectorFlight
+from uav_fault_estimator.detection.detector import DetectorFlight
 from uav_fault_estimator.flight_logs.airframe import (
     Airframe,
     mixed_output_mismatches,
@@ -143,7 +143,7 @@ def slow_stream_warning(name: str, series: TimedSeries, period_s: float) -> str 
 @dataclass(frozen=True)
 class DetectorInputs:
     """A log on the detector's grid: times_s (K,) [s], state (K, 14) and controls (K, 7) in
-    uav_sim.channels order (NaN where the log has no such channel, before or after a stream,
+    uav_common.channels order (NaN where the log has no such channel, before or after a stream,
     in its gaps), airspeed_mps (K,) (NaN likewise), and one line per thing to know
     (slow streams, absent streams, mixed outputs the log contradicts)."""
 

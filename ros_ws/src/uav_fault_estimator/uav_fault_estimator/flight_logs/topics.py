@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from rosbags.typesys import get_types_from_msg
 from rosbags.typesys.store import Typestore
-from uav_sim.channels import (
+from uav_common.channels import (
     AIR_DATA_FIELDS,
     CONTROL_CHANNELS,
     CONTROL_UNITS,

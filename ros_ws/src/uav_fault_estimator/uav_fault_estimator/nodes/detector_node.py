@@ -14,16 +14,9 @@ import sys
 from typing import Any
 
 from rclpy.node import Node
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultAlarm
-from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS
-from uav_sim.ros.messages import (
-    BODY_FRAME,
-    air_data_array,
-    controls_array,
-    header,
-    state_array,
-)
-from uav_sim.ros.node_tools import (
+from uav_common.message_fields import air_data_array, controls_array, state_array
+from uav_common.ros.messages import BODY_FRAME, header
+from uav_common.ros.node_tools import (
     ERROR,
     OK,
     STREAM_QOS,
@@ -33,13 +26,12 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultAlarm
+from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS
 
-from uav_fault_estimator.detection.self_tuning import (
-    CHANNELS,
-    DetectorSample,
-    SelfTuningDetector,
-    load_calibration,
-)
+from uav_fault_estimator.detection.calibration import CHANNELS
+from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.detector import DetectorSample, SelfTuningDetector
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {

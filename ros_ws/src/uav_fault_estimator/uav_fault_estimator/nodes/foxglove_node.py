@@ -14,11 +14,11 @@ import sys
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.topic_endpoint_info import TopicEndpointInfo
-from uav_sim.ros.node_tools import OK, Diagnostics, ParameterSpec, declare_parameters, run_node
+from uav_common.ros.node_tools import OK, Diagnostics, ParameterSpec, declare_parameters, run_node
 
-from uav_fault_estimator.analysis.live_view import LiveView
-from uav_fault_estimator.analysis.recording import project_typestore
+from uav_fault_estimator.live_view import LiveView
 from uav_fault_estimator.nodes.raw_topics import RawTopics
+from uav_fault_estimator.recording.project_bag import project_typestore
 
 PARAMETERS = {
     "host": ParameterSpec("address the WebSocket server listens on (127.0.0.1: this machine "

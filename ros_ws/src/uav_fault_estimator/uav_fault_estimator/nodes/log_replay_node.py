@@ -1,5 +1,5 @@
 """log_replay_node: publishes a flight log as the project's streams, so that detector_node
-runs unchanged on a real flight (issue 17).
+runs unchanged on a real flight.
 
 Reads the log once (flight_logs.replay: a PX4 ULog, a ROS 1 or 2 bag, a folder of per-topic
 CSVs; the actuator outputs mapped to surfaces by the airframe file), resampled onto the
@@ -22,9 +22,8 @@ from typing import Any
 import rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs
-from uav_sim.ros.messages import air_data_message, controls_message, stamp, state_message
-from uav_sim.ros.node_tools import (
+from uav_common.ros.messages import air_data_message, controls_message, stamp, state_message
+from uav_common.ros.node_tools import (
     CLOCK_QOS,
     OK,
     STREAM_QOS,
@@ -34,7 +33,8 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
-from uav_sim.ros.paced_publishing import PacedPublishers
+from uav_common.ros.paced_publishing import PacedPublishers
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs
 
 from uav_fault_estimator.flight_logs.replay import load_replay
 

@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
+from uav_common.message_fields import stamp_nanoseconds
+from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.paced_publishing import ACK_EVERY_SAMPLES
 from uav_sim.envelope import gate
-from uav_sim.ros.messages import stamp_nanoseconds
-from uav_sim.ros.node_tools import STREAM_QOS
-from uav_sim.ros.paced_publishing import ACK_EVERY_SAMPLES
 
 from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampMatcher, StampVerdict
 

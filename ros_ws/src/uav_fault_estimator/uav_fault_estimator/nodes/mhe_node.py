@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
-from uav_fault_msgs.msg import FaultEstimate, Residuals
-from uav_sim.ros.messages import BODY_FRAME, header, stamp_nanoseconds, stamp_seconds
-from uav_sim.ros.node_tools import (
+from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
+from uav_common.ros.messages import BODY_FRAME, header
+from uav_common.ros.node_tools import (
     ERROR,
     OK,
     STREAM_QOS,
@@ -25,6 +25,7 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
+from uav_fault_msgs.msg import FaultEstimate, Residuals
 
 from uav_fault_estimator.estimation.estimator_config import (
     SOLVER_METHOD_KEY,

@@ -25,10 +25,10 @@ from rosbags.interfaces import (
     QosReliability,
     QosTime,
 )
-from uav_sim.ros.node_tools import ParameterSpec, declare_parameters, run_node
+from uav_common.ros.node_tools import ParameterSpec, declare_parameters, run_node
 
-from uav_fault_estimator.analysis.recording import Recording, project_typestore
 from uav_fault_estimator.nodes.raw_topics import RawTopics
+from uav_fault_estimator.recording.project_bag import Recording, project_typestore
 
 INFINITE_QOS_S, INFINITE_QOS_NS = 2147483647, 4294967295  # rosbag2's "infinite" duration
 PARAMETERS = {

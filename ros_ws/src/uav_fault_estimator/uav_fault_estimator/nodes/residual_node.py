@@ -12,17 +12,9 @@ import sys
 import time
 
 from rclpy.node import Node
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
-from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, WIND_LIMITS
-from uav_sim.ros.messages import (
-    BODY_FRAME,
-    air_data_array,
-    controls_array,
-    header,
-    state_array,
-    wind_array,
-)
-from uav_sim.ros.node_tools import (
+from uav_common.message_fields import air_data_array, controls_array, state_array, wind_array
+from uav_common.ros.messages import BODY_FRAME, header
+from uav_common.ros.node_tools import (
     OK,
     STREAM_QOS,
     WARN,
@@ -31,7 +23,9 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
-from uav_sim.sample_grid import GRID_TOLERANCE_S, next_grid_time
+from uav_common.sample_grid import GRID_TOLERANCE_S, next_grid_time
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
+from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, WIND_LIMITS
 
 from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_fault_estimator.estimation.residuals import (

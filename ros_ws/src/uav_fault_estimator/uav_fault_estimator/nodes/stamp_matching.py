@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
-from uav_sim.sample_grid import NANOSECONDS_PER_SECOND
+from uav_common.sample_grid import NANOSECONDS_PER_SECOND
 
 
 class StampVerdict(Enum):

@@ -8,8 +8,8 @@ nodes with use_sim_time) and `/diagnostics`. Run with use_sim_time, it follows t
 `/clock` instead of publishing it (a second vehicle in the same domain): each step waits
 until the clock has reached its time, so every vehicle flies on the one clock. Measurements
 go through the sensor model (uav_sim.sensors) unless the scenario says `sensors: {noise:
-false}`. Ends by itself at the scenario's end, with exit status 0; a bad scenario ends it
-before it starts, status 1.
+false}`. Ends by itself at the scenario's end, with exit status 0; a bad scenario or parameter
+ends it before it starts, status 2.
 """
 
 from __future__ import annotations
@@ -23,10 +23,8 @@ import rclpy
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
-
-from uav_sim.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
-from uav_sim.ros.messages import (
+from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
+from uav_common.ros.messages import (
     air_data_message,
     controls_message,
     fault_vector_message,
@@ -35,7 +33,7 @@ from uav_sim.ros.messages import (
     true_wind_message,
     wind_message,
 )
-from uav_sim.ros.node_tools import (
+from uav_common.ros.node_tools import (
     CLOCK_QOS,
     OK,
     STREAM_QOS,
@@ -45,8 +43,10 @@ from uav_sim.ros.node_tools import (
     declare_parameters,
     run_node,
 )
-from uav_sim.ros.paced_publishing import PacedPublishers
-from uav_sim.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
+from uav_common.ros.paced_publishing import PacedPublishers
+from uav_common.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
+
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 

@@ -1,0 +1,74 @@
+"""Names, order and units of the state, control and fault channels.
+
+The message field of a channel is ``<channel>_<unit>`` (``pitch_rate`` -> ``pitch_rate_radps``);
+a unit of "" means a dimensionless field named as the channel.
+"""
+
+# The paper's p, v and zeta (embedded-estimation paper, eq. 1 and section IV).
+STATE_CHANNELS: tuple[str, ...] = (
+    "latitude",
+    "longitude",
+    "altitude",
+    "roll",
+    "pitch",
+    "yaw",
+    "velocity_north",
+    "velocity_east",
+    "velocity_down",
+    "roll_rate",
+    "pitch_rate",
+    "yaw_rate",
+    "fuel_mass",
+    "engine_speed",
+)
+STATE_UNITS: tuple[str, ...] = (
+    "rad",
+    "rad",
+    "m",
+    "rad",
+    "rad",
+    "rad",
+    "mps",
+    "mps",
+    "mps",
+    "radps",
+    "radps",
+    "radps",
+    "kg",
+    "rpm",
+)
+
+# Air data (pitot-static airspeed, alpha and sideslip vanes): message AirData, whose fields
+# are AIR_DATA_FIELDS (the airspeed field says that it is the true airspeed).
+AIR_DATA_CHANNELS: tuple[str, ...] = ("airspeed", "angle_of_attack", "sideslip")
+AIR_DATA_FIELDS: tuple[str, ...] = ("true_airspeed_mps", "angle_of_attack_rad", "sideslip_rad")
+# Channels a scenario's sensor_dropouts may name.
+DROPOUT_CHANNELS: tuple[str, ...] = STATE_CHANNELS + AIR_DATA_CHANNELS
+
+CONTROL_CHANNELS: tuple[str, ...] = (
+    "flap",
+    "elevator",
+    "aileron",
+    "rudder",
+    "throttle",
+    "mixture",
+    "ignition",
+)
+CONTROL_UNITS: tuple[str, ...] = ("rad", "rad", "rad", "rad", "", "", "")
+
+# Percent change of the named coefficient (docs/design.md); the first four are the paper's.
+FAULT_NAMES: tuple[str, ...] = (
+    "right_wing_lift_loss",
+    "right_wing_drag_increase",
+    "left_wing_lift_loss",
+    "left_wing_drag_increase",
+    "propulsion_loss",
+    "pitch_moment",
+    "aileron_effectiveness_loss",
+)
+PAPER_FAULT_NAMES: tuple[str, ...] = FAULT_NAMES[:4]
+
+
+def field_name(channel: str, unit: str) -> str:
+    """Message field name of a channel: ``<channel>_<unit>``, or the channel alone."""
+    return f"{channel}_{unit}" if unit else channel

@@ -1,0 +1,40 @@
+"""Where a package's data lives: the installed share directory, or the source tree; and
+the nodes' parameter defaults (no rclpy here)."""
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+_SOURCE_PACKAGES = Path(__file__).resolve().parents[2]  # ros_ws/src in a checkout
+
+
+def share_dir(package: str) -> Path:
+    """The package's share folder (config/, and for uav_sim jsbsim/ and scenarios/).
+
+    The colcon install space when the package is installed (ament index), else its folder
+    in the source tree, so that the core runs from a checkout without a build.
+    """
+    try:
+        from ament_index_python.packages import (
+            PackageNotFoundError,
+            get_package_share_directory,
+        )
+    except ImportError:
+        return _SOURCE_PACKAGES / package
+    try:
+        return Path(get_package_share_directory(package))
+    except (PackageNotFoundError, OSError):  # not installed, or no ROS environment
+        return _SOURCE_PACKAGES / package
+
+
+def config_path(package: str, config_file: str) -> Path:
+    """share/<package>/config/<config_file> (the installed package's when installed: run
+    scripts/setup.sh after editing a config)."""
+    return share_dir(package) / "config" / config_file
+
+
+def default_parameters(package: str, config_file: str) -> dict[str, Any]:
+    """The `/**: ros__parameters` mapping of the package's config/<config_file>."""
+    with open(config_path(package, config_file)) as stream:
+        return yaml.safe_load(stream)["/**"]["ros__parameters"]

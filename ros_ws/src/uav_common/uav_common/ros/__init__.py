@@ -1,0 +1,1 @@
+"""ROS glue every node uses: parameters, diagnostics, spinning, messages, paced publishing."""

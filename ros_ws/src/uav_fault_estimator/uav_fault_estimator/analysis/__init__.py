@@ -1,1 +1,0 @@
-"""Offline runs, recordings, figures of merit, the report and its figures (no rclpy here)."""

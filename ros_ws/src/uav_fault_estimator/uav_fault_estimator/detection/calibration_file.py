@@ -1,0 +1,107 @@
+"""The detector's calibration file: YAML of Calibration's fields (the layout of
+config/detector_calibration.yaml), written by scripts/calibrate_detector.py and read by
+detector_node, checked against the node's settings and the airframe flown. No ROS here."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from uav_common.package_data import config_path
+
+from uav_fault_estimator.detection.calibration import (
+    CHANNELS,
+    PARAMETER_NAMES,
+    SIMULATED_AIRFRAME,
+    Calibration,
+    ChannelCalibration,
+)
+from uav_fault_estimator.detection.change_detection import Weibull
+
+CALIBRATION_FILE = "detector_calibration.yaml"  # in the package's config/
+
+
+def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
+    """The calibration as the file's mapping (YAML-ready lists and numbers)."""
+    return {
+        "airframe": calibration.airframe,
+        "reference_airspeed_mps": calibration.reference_airspeed_mps,
+        "sample_period_s": calibration.sample_period_s,
+        "forgetting_factor": calibration.forgetting_factor,
+        "window": calibration.window,
+        "settle_s": calibration.settle_s,
+        "parameter_deviation_weibull": _weibull_dict(calibration.parameter),
+        "channels": {name: {
+            "parameters": list(PARAMETER_NAMES[name]),
+            "theta0": c.theta0.tolist(), "p0": c.p0.tolist(),
+            "parameter_mean": c.parameter_mean.tolist(),
+            "parameter_std": c.parameter_std.tolist(),
+            "parameter_slope_per_mps": (None if c.parameter_slope is None
+                                        else c.parameter_slope.tolist()),
+            "glrt_weibull": _weibull_dict(c.glrt),
+        } for name, c in calibration.channels.items()},
+    }
+
+
+def calibration_from_dict(data: Mapping[str, Any]) -> Calibration:
+    """From calibration_to_dict's layout; KeyError or ValueError on a malformed one."""
+    reference = data["reference_airspeed_mps"]
+    channels = {}
+    for name in CHANNELS:
+        c = data["channels"][name]
+        n = len(PARAMETER_NAMES[name])
+        arrays = [np.array(c[key], dtype=float) for key in
+                  ("theta0", "p0", "parameter_mean", "parameter_std")]
+        slope = c["parameter_slope_per_mps"]
+        if [a.shape for a in arrays] != [(n,), (n, n), (n,), (n,)] or (
+                (slope is None) != (reference is None)) or (
+                slope is not None and len(slope) != n):
+            raise ValueError(f"channel {name}: arrays must be {n}, {n}x{n}, {n}, {n}, and "
+                             f"a slope of {n} exactly when scheduled on airspeed")
+        channels[name] = ChannelCalibration(
+            *arrays, glrt=Weibull(**c["glrt_weibull"]),
+            parameter_slope=None if slope is None else np.array(slope, dtype=float))
+    return Calibration(float(data["sample_period_s"]), float(data["forgetting_factor"]),
+                       int(data["window"]), float(data["settle_s"]), channels,
+                       Weibull(**data["parameter_deviation_weibull"]), str(data["airframe"]),
+                       None if reference is None else float(reference))
+
+
+def _weibull_dict(distribution: Weibull) -> dict[str, float]:
+    return {"scale": distribution.scale, "shape": distribution.shape}
+
+
+
+def shipped_calibration_path() -> Path:
+    """The package's config/detector_calibration.yaml (scripts/calibrate_detector.py)."""
+    return config_path("uav_fault_estimator", CALIBRATION_FILE)
+
+
+def load_calibration(path: str, window: int, forgetting_factor: float,
+                     airframe: str = SIMULATED_AIRFRAME) -> Calibration:
+    """The calibration file (empty path: the shipped one), checked against the node's
+    window and forgetting factor and the airframe flown; ValueError with one line naming
+    the file."""
+    file = Path(path) if path else shipped_calibration_path()
+    try:
+        calibration = calibration_from_dict(yaml.safe_load(file.read_text()))
+    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"calibration file {file}: {type(error).__name__}: {error}") from None
+    if calibration.window != window or not math.isclose(calibration.forgetting_factor,
+                                                         forgetting_factor):
+        raise ValueError(
+            f"calibration file {file} was made for window {calibration.window} and "
+            f"forgetting factor {calibration.forgetting_factor}, not {window} and "
+            f"{forgetting_factor}: run scripts/calibrate_detector.py for these")
+    if calibration.airframe != airframe:
+        raise ValueError(
+            f"calibration file {file} is for the airframe '{calibration.airframe}', not "
+            f"'{airframe}': calibrate from fault-free flights of '{airframe}' "
+            "(scripts/screen_logs.py)")
+    return calibration
+
+

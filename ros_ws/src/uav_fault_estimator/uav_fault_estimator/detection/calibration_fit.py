@@ -1,0 +1,115 @@
+"""The detector's calibration from fault-free flights (Blanke & Hansen, section III): the
+RLS's initial parameters by least squares, then, from the detector run over each flight,
+the parameters' spread (optionally scheduled on airspeed) and the Weibull fits of both
+statistics. No ROS here."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+
+from uav_fault_estimator.detection.calibration import (
+    CHANNELS,
+    MIN_SCHEDULE_SPAN_MPS,
+    SIMULATED_AIRFRAME,
+    Calibration,
+    ChannelCalibration,
+    parameter_deviation,
+)
+from uav_fault_estimator.detection.change_detection import (
+    Weibull,
+    weibull_fit,
+)
+from uav_fault_estimator.detection.detector import (
+    YAW_RATE,
+    detector_flight,
+    regressions,
+    run_detector,
+)
+
+
+def fit_initial_parameters(flights: Iterable[tuple[np.ndarray, np.ndarray]],
+                           forgetting_factor: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """theta0 and P0 per channel from flights given as (states (K, n), controls (K, m)) on
+    the sample grid: theta0 the least-squares fit over all their samples, P0 the RLS
+    covariance it settles to on such data, (1 - lambda_f) (Phiᵀ Phi / K)^-1."""
+    rows: dict[str, list] = {name: [] for name in CHANNELS}
+    targets: dict[str, list] = {name: [] for name in CHANNELS}
+    for states, controls in flights:
+        for k in range(1, len(states)):
+            for name, (phi, y) in regressions(states[k], controls[k],
+                                               states[k - 1, YAW_RATE]).items():
+                rows[name].append(phi)
+                targets[name].append(y)
+    fitted = {}
+    for name in CHANNELS:
+        phi, y = np.array(rows[name]), np.array(targets[name])
+        theta0, *_ = np.linalg.lstsq(phi, y, rcond=None)
+        p0 = (1.0 - forgetting_factor) * np.linalg.inv(phi.T @ phi / len(y))
+        fitted[name] = (theta0, p0)
+    return fitted
+
+
+def calibrate(flights: Sequence[Sequence[np.ndarray]], sample_period_s: float,
+              forgetting_factor: float, window: int, settle_s: float,
+              airframe: str = SIMULATED_AIRFRAME, scheduled: bool = False) -> Calibration:
+    """The calibration of airframe from fault-free flights on the sample grid
+    (DetectorFlight, or (times, states, controls) without airspeed): the initial
+    parameters, then, from the RLS and GLRT run over each flight from them, the parameters'
+    spread and the Weibull fits of both statistics. scheduled: the parameters' means affine
+    in the filtered airspeed (airspeed_schedule); ValueError when the flights' airspeeds
+    span less than MIN_SCHEDULE_SPAN_MPS."""
+    flights = [detector_flight(flight) for flight in flights]
+    initial = fit_initial_parameters([(f.states, f.controls) for f in flights],
+                                     forgetting_factor)
+    # The RLS and the GLRT need only theta0 and P0; spread and Weibulls are placeholders.
+    provisional = Calibration(sample_period_s, forgetting_factor, window, settle_s, {
+        name: ChannelCalibration(theta0, p0, np.zeros(theta0.size), np.ones(theta0.size),
+                                 Weibull(1.0, 1.0))
+        for name, (theta0, p0) in initial.items()}, Weibull(1.0, 1.0), airframe)
+    samples = [sample for flight in flights
+               for sample in run_detector(provisional, flight, false_alarm_probability=0.5)
+               if np.isfinite(sample.statistic).all()]
+    statistics = np.array([sample.statistic for sample in samples])
+    airspeeds = np.array([sample.airspeed_mps for sample in samples])
+    reference = airspeed_reference(airspeeds) if scheduled else None
+    channels, deviation = {}, np.zeros(len(samples))
+    for k, name in enumerate(CHANNELS):
+        theta = np.array([sample.theta[name] for sample in samples])
+        mean, slope, std = (airspeed_schedule(theta, airspeeds - reference) if scheduled
+                            else (theta.mean(axis=0), None, theta.std(axis=0)))
+        channel = ChannelCalibration(*initial[name], mean, std, weibull_fit(statistics[:, k]),
+                                     slope)
+        offsets = airspeeds - reference if scheduled else 0.0
+        deviation = np.maximum(deviation, parameter_deviation(theta, channel, offsets))
+        channels[name] = channel
+    return Calibration(sample_period_s, forgetting_factor, window, settle_s, channels,
+                       weibull_fit(deviation), airframe, reference)
+
+
+def airspeed_reference(airspeeds_mps: np.ndarray) -> float:
+    """U_ref of a schedule: the calibration samples' median airspeed [m/s]; ValueError when
+    they have none or span less than MIN_SCHEDULE_SPAN_MPS (5th to 95th percentile)."""
+    known = airspeeds_mps[np.isfinite(airspeeds_mps)]
+    if known.size < airspeeds_mps.size or known.size == 0:
+        raise ValueError("an airspeed schedule needs the airspeed of every calibration "
+                         f"sample; {airspeeds_mps.size - known.size} of {airspeeds_mps.size} "
+                         "have none")
+    low, high = np.percentile(known, [5.0, 95.0])
+    if high - low < MIN_SCHEDULE_SPAN_MPS:
+        raise ValueError(f"the calibration flights span {low:.1f}-{high:.1f} m/s of airspeed: "
+                         f"an airspeed schedule needs at least {MIN_SCHEDULE_SPAN_MPS:g} m/s "
+                         "(fly them at several speeds, or calibrate without a schedule)")
+    return float(np.median(known))
+
+
+def airspeed_schedule(theta: np.ndarray, airspeed_offsets_mps: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The parameters' fault-free mean at U_ref, slope [per m/s] and standard deviation
+    about that line: least squares of theta (K, n) on (1, U - U_ref) over the samples."""
+    regressors = np.column_stack([np.ones_like(airspeed_offsets_mps), airspeed_offsets_mps])
+    (mean, slope), *_ = np.linalg.lstsq(regressors, theta, rcond=None)
+    return mean, slope, (theta - regressors @ np.vstack([mean, slope])).std(axis=0)
+
+

@@ -1,0 +1,185 @@
+"""Flight logs screened by the self-tuning detector (scripts/screen_logs.py): one
+log's detector samples as alarm intervals, counts and a summary, its table and its figure.
+No ROS here.
+
+Three tests, each per channel (roll, pitch, yaw: self_tuning.CHANNELS): "glrt" the channel's
+GLRT statistic over its threshold, "parameter" the channel's largest normalised parameter
+deviation over the parameter threshold, "combined" both on the same channel (the detector's
+combined alarm is raised when some channel's is). An interval is a run of consecutive
+detector samples (one sample period apart: a skipped sample ends it) on which a test
+alarmed on a channel, from the first such sample's time to the last's.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")  # no display: figures are files
+import matplotlib.pyplot as plt
+import numpy as np
+from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.sample_grid import GRID_TOLERANCE_S
+
+from uav_fault_estimator.detection.calibration import CHANNELS
+from uav_fault_estimator.detection.detector import DetectorSample
+from uav_fault_estimator.flight_logs.resample import DetectorInputs
+from uav_fault_estimator.reporting.figures import save_figure, shade_alarms
+
+TESTS = ("glrt", "parameter", "combined")
+COMBINED = "combined"
+# Times in the outputs: the grid's stamps are whole microseconds (sample_grid).
+TIME_DECIMALS = 6
+
+
+@dataclass(frozen=True)
+class AlarmInterval:
+    """A run of consecutive samples on which one test alarmed on one channel: start_s and
+    end_s the first and last sample's times [s from the log's start], samples their count."""
+
+    start_s: float
+    end_s: float
+    channel: str
+    test: str
+    samples: int
+
+
+def channel_alarms(samples: Sequence[DetectorSample]) -> dict[str, np.ndarray]:
+    """Per test (TESTS), which samples alarmed on which channel: (K, 3) bool in CHANNELS
+    order (a NaN statistic or deviation, before the detector settles, never alarms)."""
+    glrt = np.array([sample.alarm for sample in samples], dtype=bool).reshape(-1, len(CHANNELS))
+    parameter = np.array([sample.parameter_deviation > sample.parameter_threshold
+                          for sample in samples], dtype=bool).reshape(-1, len(CHANNELS))
+    return {"glrt": glrt, "parameter": parameter, COMBINED: glrt & parameter}
+
+
+def raised_runs(times_s: np.ndarray, raised: np.ndarray,
+                period_s: float) -> list[tuple[int, int]]:
+    """(first, last) indices of each run of raised samples whose times_s [s] follow one
+    another by one period_s [s]."""
+    runs: list[tuple[int, int]] = []
+    for k in map(int, np.flatnonzero(raised)):
+        if runs and runs[-1][1] == k - 1 and (
+                times_s[k] - times_s[k - 1] <= period_s + GRID_TOLERANCE_S):
+            runs[-1] = (runs[-1][0], k)
+        else:
+            runs.append((k, k))
+    return runs
+
+
+def alarm_intervals(samples: Sequence[DetectorSample], period_s: float) -> list[AlarmInterval]:
+    """Every test's alarm intervals on every channel, by start time (then CHANNELS, TESTS
+    order); period_s the detector's sample period [s]."""
+    times_s = np.array([sample.time_s for sample in samples])
+    intervals = []
+    for test, raised in channel_alarms(samples).items():
+        for c, channel in enumerate(CHANNELS):
+            intervals += [AlarmInterval(round(float(times_s[first]), TIME_DECIMALS),
+                                        round(float(times_s[last]), TIME_DECIMALS),
+                                        channel, test, last - first + 1)
+                          for first, last in raised_runs(times_s, raised[:, c], period_s)]
+    return sorted(intervals, key=lambda i: (i.start_s, CHANNELS.index(i.channel),
+                                            TESTS.index(i.test)))
+
+
+def first_combined_alarm_s(samples: Sequence[DetectorSample]) -> float | None:
+    """The time [s] of the first combined alarm; None without one."""
+    return next((round(sample.time_s, TIME_DECIMALS) for sample in samples
+                 if sample.combined_alarm), None)
+
+
+def log_summary(name: str, source: str, samples: Sequence[DetectorSample], period_s: float,
+                warnings: Sequence[str]) -> dict[str, Any]:
+    """A log's screening as JSON-ready data: its name and source (path), samples (the
+    detector's), tested_samples (those with every GLRT statistic: after the settling and
+    the window), alarm_samples per test (per channel and "any"), the any-channel alarm rate
+    per tested sample, the first combined alarm [s], the intervals and the log's warnings."""
+    alarms = channel_alarms(samples)
+    tested = int(sum(np.isfinite(sample.statistic).all() for sample in samples))
+    counts = {test: {"any": int(raised.any(axis=1).sum()),
+                     **{channel: int(raised[:, c].sum()) for c, channel in enumerate(CHANNELS)}}
+              for test, raised in alarms.items()}
+    return {
+        "log": name,
+        "source": source,
+        "samples": len(samples),
+        "tested_samples": tested,
+        "alarm_samples": counts,
+        "alarm_rate": {test: (count["any"] / tested if tested else None)
+                       for test, count in counts.items()},
+        "first_combined_alarm_s": first_combined_alarm_s(samples),
+        "intervals": [asdict(interval) for interval in alarm_intervals(samples, period_s)],
+        "warnings": list(warnings),
+    }
+
+
+TABLE_COLUMNS = ("start_s", "end_s", "channel", "test", "samples")
+
+
+def alarm_table(intervals: Sequence[AlarmInterval]) -> str:
+    """The intervals as an aligned text table, one line per interval under a heading
+    (TABLE_COLUMNS); "no alarms" without any."""
+    if not intervals:
+        return "no alarms"
+    lines = [f"{'start_s':>10} {'end_s':>10}  {'channel':<7} {'test':<9} {'samples':>7}"]
+    lines += [f"{i.start_s:10.1f} {i.end_s:10.1f}  {i.channel:<7} {i.test:<9} {i.samples:7d}"
+              for i in intervals]
+    return "\n".join(lines)
+
+
+def write_alarm_csv(path: Path, intervals: Sequence[AlarmInterval]) -> None:
+    """The intervals as CSV with the header TABLE_COLUMNS."""
+    with open(path, "w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(TABLE_COLUMNS)
+        writer.writerows([getattr(interval, column) for column in TABLE_COLUMNS]
+                         for interval in intervals)
+
+
+def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[DetectorSample],
+                   intervals: Sequence[AlarmInterval], period_s: float, path: Path) -> Path:
+    """One log's figure: body rates and surfaces [deg], airspeed (the log's and the filtered
+    one the schedule used) [m/s], each GLRT statistic over its threshold and the parameter
+    deviations over theirs (log scale), the combined alarm intervals shaded on every panel
+    (each sample widened by half a period_s [s] either side)."""
+    times_s = np.array([sample.time_s for sample in samples])
+    combined = [(i.start_s - period_s / 2, i.end_s + period_s / 2)
+                for i in intervals if i.test == COMBINED]
+    figure, axes = plt.subplots(7, 1, figsize=(10, 15), sharex=True)
+    for name in ("roll_rate", "pitch_rate", "yaw_rate"):
+        axes[0].plot(inputs.times_s, np.degrees(inputs.state[:, STATE_CHANNELS.index(name)]),
+                     label=name, linewidth=0.8)
+    axes[0].set_ylabel("body rate [deg/s]")
+    for name in ("aileron", "elevator", "rudder"):
+        axes[1].plot(inputs.times_s,
+                     np.degrees(inputs.controls[:, CONTROL_CHANNELS.index(name)]),
+                     label=name, linewidth=0.8)
+    axes[1].set_ylabel("surface [deg]")
+    axes[2].plot(inputs.times_s, inputs.airspeed_mps, label="log", linewidth=0.8)
+    axes[2].plot(times_s, [sample.airspeed_mps for sample in samples], label="filtered")
+    axes[2].set_ylabel("airspeed [m/s]")
+    for c, channel in enumerate(CHANNELS):
+        statistic = np.array([sample.statistic[c] for sample in samples])
+        axes[3 + c].semilogy(times_s, np.where(statistic > 0, statistic, math.nan),
+                             label="statistic")
+        axes[3 + c].semilogy(times_s, [sample.threshold[c] for sample in samples], "k:",
+                             label="threshold")
+        axes[3 + c].set_ylabel(f"GLRT {channel}")
+    deviation = np.array([sample.parameter_deviation for sample in samples])
+    for c, channel in enumerate(CHANNELS):
+        axes[6].semilogy(times_s, deviation[:, c], label=channel, linewidth=0.8)
+    axes[6].semilogy(times_s, [sample.parameter_threshold for sample in samples], "k:",
+                     label="threshold")
+    axes[6].set_ylabel("parameter deviation")
+    for axis in axes:
+        shade_alarms(axis, combined)
+        axis.legend(fontsize=7, loc="upper left")
+    axes[0].set_title(title)
+    axes[-1].set_xlabel("time from the log's start [s]")
+    return save_figure(figure, path)

@@ -1,0 +1,202 @@
+"""The main job's chain without ROS: the core simulator, the residual generator and the
+moving-horizon estimator on one scenario, with the nodes' parameters (their config YAML
+unless given), every 0.5 s of simulation time as the nodes do. For tests, tuning and
+benchmarks; metrics.py turns the result into metrics.json's figures."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import multiprocessing
+import os
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any, NamedTuple
+
+import numpy as np
+import yaml
+from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
+from uav_common.package_data import default_parameters
+from uav_common.sample_grid import on_grid
+from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
+from uav_sim.simulation import Simulation
+
+from uav_fault_estimator.detection.detector import DetectorFlight
+from uav_fault_estimator.estimation.estimator_config import (
+    config_from_parameters,
+    noise_calibration,
+)
+from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
+from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
+
+PACKAGE = "uav_fault_estimator"
+_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
+
+
+def fly_and_estimate(
+    scenario: Scenario,
+    residual_overrides: Mapping[str, Any] | None = None,
+    mhe_overrides: Mapping[str, Any] | None = None,
+    true_wind: bool = False,
+) -> tuple[EstimateSeries, SeededSeries]:
+    """Fly the scenario and estimate its faults every update_period_s [s] of sim time.
+
+    The estimator's parameters are mhe_node's defaults, then the scenario's `estimator`
+    overrides, then mhe_overrides. Returns the published estimates (what mhe_node would
+    publish; solve times are the estimator's update times) and the seeded faults sampled
+    at the same stamps. The models fly the air data where the aircraft has it, as
+    residual_node does. true_wind: the models get the true wind (background and
+    turbulence) instead, which no aircraft has: a bound on what better wind knowledge
+    could give.
+    """
+    residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
+                **(residual_overrides or {})}
+    mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), **scenario.estimator,
+           **(mhe_overrides or {})}
+    generator = residual_generator(residual)
+    estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
+    noise = noise_calibration(mhe)
+    published = list(mhe["fault_names"])
+    simulation = Simulation(scenario)
+    period_s = float(residual["update_period_s"])
+    stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
+    sample = simulation.sample()
+    while True:
+        wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
+        result = generator.update(sample.time_s, sample.state, sample.controls, wind,
+                                  None if true_wind else sample.air_data)
+        if result is not None and on_grid(sample.time_s, period_s):
+            estimate = estimator.update(
+                result.residual, result.sensitivity, result.valid,
+                noise.q_diag(result.wind_source, mhe["noise_variance_factor"]))
+            stamps.append(sample.time_s)
+            values.append(estimate.fault_pct[estimate.columns(published)])
+            statuses.append(int(estimate.status))
+            times_ms.append(estimate.update_time_ms)
+            cpu_ms.append(estimate.update_cpu_ms)
+            seeded.append(sample.seeded_faults_pct)
+        if simulation.finished:
+            break
+        sample = simulation.step()
+    stamps_s = np.array(stamps)
+    return (
+        EstimateSeries(list(mhe["fault_names"]), stamps_s, np.array(values),
+                       np.array(statuses), np.array(times_ms), np.array(cpu_ms),
+                       estimator.config.solver.method),
+        SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
+    )
+
+
+class GridFlight(NamedTuple):
+    """A simulated flight every period_s: times_s (K,) [s], states (K, 14), controls (K, 7),
+    seeded faults (K, 7) [%], in uav_common.channels order, and the measured true airspeed
+    (K,) [m/s] (NaN without air data)."""
+
+    times_s: np.ndarray
+    states: np.ndarray
+    controls: np.ndarray
+    seeded_pct: np.ndarray
+    airspeed_mps: np.ndarray
+
+    @property
+    def detector_flight(self) -> DetectorFlight:
+        """What the detector takes of it."""
+        return DetectorFlight(self.times_s, self.states, self.controls, self.airspeed_mps)
+
+
+def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
+    """The scenario's samples every period_s [s] of simulation time (a multiple of the
+    sensor period)."""
+    simulation = Simulation(scenario)
+    every = round(period_s / simulation.period_s)
+    if every < 1 or not on_grid(period_s, simulation.period_s):
+        raise ValueError(f"{period_s} s is not a multiple of the sensor period "
+                         f"{simulation.period_s} s")
+    samples = [simulation.sample()]
+    while not simulation.finished:
+        sample = simulation.step()
+        if simulation.sample_count % every == 0:
+            samples.append(sample)
+    return GridFlight(np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
+                      np.array([s.controls for s in samples]),
+                      np.array([s.seeded_faults_pct for s in samples]),
+                      np.array([math.nan if s.air_data is None else s.air_data[_AIRSPEED]
+                                for s in samples]))
+
+
+def fly_on_grid_each(scenarios: Sequence[Scenario],
+                     period_s: float) -> list[tuple[np.ndarray, ...]]:
+    """fly_on_grid of every scenario, one process per core (each_in_processes)."""
+    return each_in_processes(functools.partial(fly_on_grid, period_s=period_s), scenarios)
+
+
+def fault_free_residuals(scenario: Scenario) -> np.ndarray:
+    """The residuals (K, 6) residual_node would publish for the scenario with its default
+    parameters, on the update grid, where every row is valid. (y does not depend on S:
+    the sensitivities' model copies are left out.)"""
+    parameters = default_parameters(PACKAGE, "residual_node.yaml")
+    generator = residual_generator({**parameters, "fault_names": []})
+    period_s = float(parameters["update_period_s"])
+    simulation = Simulation(scenario)
+    sample, rows = simulation.sample(), []
+    while True:
+        result = generator.update(sample.time_s, sample.state, sample.controls,
+                                  sample.wind_filtered_ned_mps, sample.air_data)
+        if result is not None and on_grid(sample.time_s, period_s) and result.valid.all():
+            rows.append(result.residual)
+        if simulation.finished:
+            return np.array(rows)
+        sample = simulation.step()
+
+
+def each_in_processes(function, items: Sequence) -> list:
+    """function(item) for every item, one process per core: for independent flights, the
+    results of running them one after the other. Spawned, not forked: the caller may be a
+    ROS process with threads of its own."""
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=os.cpu_count(), mp_context=context) as pool:
+        return list(pool.map(function, items))
+
+
+def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,
+                 wind_speed_mps: float) -> Scenario:
+    """The scenario with another turbulence seed and a horizontal background wind of
+    wind_speed_mps [m/s] blowing towards wind_direction_deg [deg from north]."""
+    direction = math.radians(wind_direction_deg)
+    wind = dataclasses.replace(scenario.wind, north_mps=wind_speed_mps * math.cos(direction),
+                               east_mps=wind_speed_mps * math.sin(direction))
+    return dataclasses.replace(scenario, seed=seed, wind=wind)
+
+
+def describe_flights(scenarios: Sequence[Scenario]) -> str:
+    """One line for a calibration file's header: which flights of which scenario."""
+    first = scenarios[0]
+    return (f"'{first.name}' ({first.duration_s:g} s each, {first.wind.turbulence} "
+            f"turbulence), seeds {', '.join(str(s.seed) for s in scenarios)}; winds "
+            "north/east [m/s] "
+            + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios))
+
+
+def fault_free_flights(count: int, first_seed: int,
+                       first_direction_deg: float = 0.0) -> list[Scenario]:
+    """count variants of the shipped fault_free scenario (the default flight in its own
+    turbulence and sensors): seeds from first_seed, background winds of 5.0-6.25 m/s (20-25 %
+    of airspeed) towards directions 360/count degrees apart from first_direction_deg. The
+    detector's calibration flights and, with other seeds, its held-out test flights."""
+    base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
+    return [wind_variant(base, first_seed + i, first_direction_deg + 360.0 * i / count,
+                         5.0 + 0.25 * (i % 6)) for i in range(count)]
+
+
+def write_calibration(path: os.PathLike | str, header: str, calibration: Mapping[str, Any],
+                      flights: str, seconds: float) -> None:
+    """Write a calibration file, the calibration scripts' output: header (its comment lines,
+    saying what it was made from), then the calibration's file mapping as YAML in its own
+    key order; and say on stdout that it was made on `flights` ("12 flights") in
+    `seconds` of wall time [s]."""
+    with open(path, "w") as stream:
+        stream.write(header + yaml.safe_dump(dict(calibration), sort_keys=False))
+    print(f"calibrated on {flights} in {seconds:.1f} s: {path}")

@@ -1,0 +1,2 @@
+"""A flight's report from its recording alone: metrics.json's figures of merit, the table
+and the figures."""

@@ -1,0 +1,204 @@
+"""A run's metrics.json (docs/design.md) from its recording's messages (recording.read_topics).
+No ROS here: metrics.py computes the figures."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from uav_common.health import CPU_KEY, hardware_id
+from uav_common.message_fields import stamp_seconds
+from uav_common.package_data import default_parameters
+
+from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
+from uav_fault_estimator.recording.project_bag import WALL_S, RecordingError
+from uav_fault_estimator.reporting.metrics import (
+    DETECTION_THRESHOLD_PCT,
+    SETTLE_S,
+    AlarmSeries,
+    EstimateSeries,
+    SeededSeries,
+    alarm_metrics,
+    fault_metrics,
+    solver_metrics,
+)
+
+ESTIMATE_TOPIC = "/faults/estimate"
+SEEDED_TOPIC = "/faults/seeded"
+STATE_TOPIC = "/state"
+ALARM_TOPIC = "/faults/alarm"  # optional: only when detector_node ran
+# Every node's health, CPU time included: read on its own (global, and kept out of the
+# recording's wall span: the nodes report on it before and after the flight)
+DIAGNOSTICS_TOPIC = "/diagnostics"
+TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC, ALARM_TOPIC)
+REQUIRED_TOPICS = (ESTIMATE_TOPIC, SEEDED_TOPIC, STATE_TOPIC)
+
+
+@dataclass(frozen=True)
+class Run:
+    """What a recording holds for the metrics: estimates, seeded faults, the flight's
+    simulated duration [s], the wall time the recording spans [s], and the detector's
+    alarms (None when it did not run)."""
+
+    estimates: EstimateSeries
+    seeded: SeededSeries
+    duration_s: float
+    wall_s: float
+    alarms: AlarmSeries | None = None
+    cpu_s: Mapping[str, float] | None = None  # each node's CPU time over the run [s]
+
+
+def run_from(messages: dict[str, list], bag: Path) -> Run:
+    """The Run of a recording's messages (recording.read_topics of at least TOPICS);
+    RecordingError (a ValueError) naming the bag when a stream is missing."""
+    missing = [topic for topic in REQUIRED_TOPICS if not messages.get(topic)]
+    if missing:
+        raise RecordingError(f"recording {bag}: no messages on {', '.join(missing)}")
+    estimates, seeded = messages[ESTIMATE_TOPIC], messages[SEEDED_TOPIC]
+    return Run(
+        estimates=EstimateSeries(
+            names=list(estimates[0].names),
+            stamps_s=np.array([stamp_seconds(m.header.stamp) for m in estimates]),
+            values_pct=np.array([m.values_pct for m in estimates]),
+            statuses=np.array([m.solver_status for m in estimates]),
+            solve_times_ms=np.array([m.solve_time_ms for m in estimates]),
+            cpu_times_ms=np.array([m.update_cpu_time_ms for m in estimates]),
+        ),
+        seeded=SeededSeries(
+            names=list(seeded[0].names),
+            stamps_s=np.array([stamp_seconds(m.header.stamp) for m in seeded]),
+            values_pct=np.array([m.values_pct for m in seeded]),
+        ),
+        duration_s=stamp_seconds(messages[STATE_TOPIC][-1].header.stamp),
+        wall_s=messages[WALL_S],
+        alarms=alarm_series(messages.get(ALARM_TOPIC) or []),
+    )
+
+
+def alarm_series(alarms: list) -> AlarmSeries | None:
+    """The FaultAlarm messages as an AlarmSeries; None for none."""
+    if not alarms:
+        return None
+    return AlarmSeries(
+        channel_names=list(alarms[0].channel_names),
+        stamps_s=np.array([stamp_seconds(m.header.stamp) for m in alarms]),
+        alarm=np.array([m.alarm for m in alarms], dtype=bool),
+        parameter_alarm=np.array([m.parameter_alarm for m in alarms], dtype=bool),
+        combined_alarm=np.array([m.combined_alarm for m in alarms], dtype=bool),
+        tested=np.array([np.isfinite(m.statistic).all() for m in alarms], dtype=bool),
+        false_alarm_probability=float(alarms[0].false_alarm_probability),
+    )
+
+
+def node_cpu_s(diagnostics: list, namespace: str = "") -> dict[str, float]:
+    """Each node's CPU time over the run [s], by node name, from the CPU times on its
+    /diagnostics statuses (uav_common.health.CPU_KEY): its last less its first, which leaves
+    out the start-up before the first status (imports, JSBSim's loading), of the nodes in
+    namespace ("" for none; the recorder's and other vehicles' left out)."""
+    first, last = {}, {}
+    for name, values in _node_statuses(diagnostics, namespace):
+        if CPU_KEY in values:
+            first.setdefault(name, float(values[CPU_KEY]))
+            last[name] = float(values[CPU_KEY])
+    return {name: last[name] - first[name] for name in sorted(last)}
+
+
+def solver_method(diagnostics: list, namespace: str = "") -> str | None:
+    """The solver method mhe_node in namespace reported on /diagnostics (its last status's
+    estimator_config.SOLVER_METHOD_KEY); None when it reported none."""
+    method = None
+    for name, values in _node_statuses(diagnostics, namespace):
+        if name == "mhe_node":
+            method = values.get(SOLVER_METHOD_KEY, method)
+    return method
+
+
+def _node_statuses(diagnostics: list, namespace: str) -> Iterator[tuple[str, dict[str, str]]]:
+    """(node name, its key-value pairs) of every /diagnostics status of the nodes in
+    namespace, in the order they came."""
+    wanted = hardware_id(namespace)
+    for array in diagnostics:
+        for status in array.status:
+            if status.hardware_id == wanted:
+                yield (status.name.rsplit("/", 1)[-1],
+                       {item.key: item.value for item in status.values})
+
+
+def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
+                settle_s: float = SETTLE_S,
+                threshold_pct: float = DETECTION_THRESHOLD_PCT) -> dict:
+    """metrics.json as docs/design.md lays it out. update_period_s [s]: residual_node's, one
+    estimate per residual (default: its default parameter, config/residual_node.yaml)."""
+    if update_period_s is None:
+        update_period_s = residual_update_period_s()
+    faults, false_alarms = fault_metrics(run.estimates, run.seeded, settle_s, threshold_pct)
+    return {
+        "scenario": scenario,
+        "duration_s": round(run.duration_s, 3),
+        "settle_s": settle_s,
+        "detection_threshold_pct": threshold_pct,
+        "faults": faults,
+        "false_alarms": false_alarms,
+        "solver": solver_metrics(run.estimates),
+        "pipeline": {
+            "wall_s": round(run.wall_s, 3),
+            "real_time_factor": round(run.duration_s / run.wall_s, 2) if run.wall_s else None,
+            "messages_expected": round(run.duration_s / update_period_s),
+            "messages_received": len(run.estimates.stamps_s),
+            "cpu_s_per_sim_s": None if not run.cpu_s else {
+                name: round(cpu_s / run.duration_s, 4) for name, cpu_s in run.cpu_s.items()},
+        },
+        "alarms": alarm_metrics(run.alarms, run.seeded) if run.alarms else None,
+    }
+
+
+def residual_update_period_s() -> float:
+    """residual_node's default update_period_s [s] (config/residual_node.yaml, its one
+    home): the nodes publish a residual and an estimate every this much sim time."""
+    parameters = default_parameters("uav_fault_estimator", "residual_node.yaml")
+    return float(parameters["update_period_s"])
+
+
+def table(metrics: dict) -> str:
+    """The per-fault figures and the run's, as aligned text."""
+    lines = [f"scenario {metrics['scenario']}: {metrics['duration_s']:g} s, settle "
+             f"{metrics['settle_s']:g} s, threshold {metrics['detection_threshold_pct']:g} %",
+             f"{'fault':<26}{'seeded':>8}{'final':>9}{'estimate':>10}{'rmse':>8}"
+             f"{'max err':>9}{'delay s':>9}"]
+    for name, fault in metrics["faults"].items():
+        # None: no figure (a flight no longer than settle_s has no error figures)
+        lines.append(
+            f"{name:<26}{'yes' if fault['seeded'] else 'no':>8}"
+            f"{_figure(fault['seeded_final_pct'], 9)}{_figure(fault['estimate_final_pct'], 10)}"
+            f"{_figure(fault['rmse_pct'], 8)}{_figure(fault['max_abs_error_pct'], 9)}"
+            f"{_figure(fault['detection_delay_s'], 9, '.1f')}")
+    solver, pipeline = metrics["solver"], metrics["pipeline"]
+    lines += [
+        f"false alarms: {', '.join(metrics['false_alarms']) or 'none'}",
+        f"solver: {solver['solves']} solves, {solver['failures']} failures, median "
+        f"{solver['median_ms']} ms, p99 {solver['p99_ms']} ms, max {solver['max_ms']} ms "
+        f"(wall); CPU median {solver['cpu_median_ms']} ms, p99 {solver['cpu_p99_ms']} ms",
+        f"pipeline: {pipeline['messages_received']}/{pipeline['messages_expected']} estimates,"
+        f" {pipeline['wall_s']} s wall, real-time factor {pipeline['real_time_factor']}",
+    ]
+    if pipeline["cpu_s_per_sim_s"]:
+        lines.append("CPU per simulated second [s]: " + ", ".join(
+            f"{name} {cpu:.3f}" for name, cpu in pipeline["cpu_s_per_sim_s"].items()))
+    alarms = metrics.get("alarms")
+    if alarms:
+        lines.append(f"detector: P_FA {alarms['false_alarm_probability']:g} per sample; "
+                     f"{alarms['fault_free_samples']} fault-free samples")
+        lines += [f"  {name:<11} fault-free alarms {test['fault_free_alarms']:>4}, first alarm "
+                  f"after the fault {_seconds(test['first_alarm_delay_s'])}"
+                  for name, test in alarms["tests"].items()]
+    return "\n".join(lines)
+
+
+def _figure(value: float | None, width: int, spec: str = ".2f") -> str:
+    return f"{'-' if value is None else format(value, spec):>{width}}"
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f} s"

@@ -1,0 +1,1 @@
+"""Studies that measure the diagnosis over many simulated flights (python -m studies.NAME)."""

@@ -1,0 +1,112 @@
+"""The moving-horizon estimator under sensor loss, bad data and a failing solver: it keeps
+its last good estimate, says why, and recovers on the next update."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers.synthetic_residuals import SAMPLES, estimator, sequence
+from uav_fault_estimator.estimation.solve_status import SolveStatus
+
+
+@pytest.mark.timeout(60)
+def test_rows_marked_invalid_are_left_out_of_the_fit():
+    y, s, f = sequence()
+    lost = slice(40, 60)  # roll and yaw channels lost for 20 samples, garbage in them
+    valid = np.ones((SAMPLES, 6), dtype=bool)
+    valid[lost, 3] = valid[lost, 5] = False
+    garbage_y, garbage_s = y.copy(), s.copy()
+    garbage_y[lost, 3] = 1e6
+    garbage_s[lost, 5] = -1e6
+    clean, dirty = estimator(), estimator()
+    for k in range(SAMPLES):
+        expected = clean.update(np.where(valid[k], y[k], 0.0),
+                                np.where(valid[k, :, None], s[k], 0.0), valid[k])
+        result = dirty.update(garbage_y[k], garbage_s[k], valid[k])
+        assert result.status is SolveStatus.SOLVED
+        assert result.fault_pct == pytest.approx(expected.fault_pct, abs=1e-9)
+    print(f"final estimate {result.fault_pct} % for seeded {f[-1]} %")
+    assert result.fault_pct == pytest.approx(f[-1], abs=0.5)
+
+
+@pytest.mark.timeout(60)
+def test_non_finite_data_and_a_failed_solve_keep_the_last_estimate_then_recover():
+    y, s, _ = sequence()
+    reference, faulty = estimator(), estimator()
+    previous = None
+    for k in range(SAMPLES):
+        expected = reference.update(y[k], s[k])
+        if k == 80:  # a NaN on a channel marked valid
+            bad_y = y[k].copy()
+            bad_y[2] = np.nan
+            result = faulty.update(bad_y, s[k])
+            assert result.status is SolveStatus.INVALID_DATA
+            assert result.fault_pct == pytest.approx(previous.fault_pct)
+        elif k == 90:  # the solver stops before converging
+            faulty.solver.settings.max_iter = 1
+            result = faulty.update(y[k], s[k])
+            faulty.solver.settings.max_iter = reference.solver.settings.max_iter
+            assert result.status is SolveStatus.MAX_ITERATIONS
+            assert result.fault_pct == pytest.approx(previous.fault_pct)
+        else:
+            result = faulty.update(y[k], s[k])
+            assert result.status is SolveStatus.SOLVED
+        if k == 81 or k == 91:
+            print(f"recovered at sample {k}: {result.fault_pct} vs {expected.fault_pct} %")
+        previous = result
+    # the NaN sample sits in the window with no weight: the estimates differ a little until
+    # it leaves the window, then agree again
+    assert result.fault_pct == pytest.approx(expected.fault_pct, abs=1e-3)
+
+
+@pytest.mark.timeout(60)
+def test_an_absurd_residual_is_left_out_like_a_lost_one():
+    """y = 1e300 (or 1e9) on every channel of one sample, marked valid: INVALID_DATA, the
+    last good estimate kept, and from the next update on what an estimator gets that saw the
+    sample as lost, to the solver's accuracy (the two warm-start from different points:
+    0.05 %, above the 0.039 % ProxSuite's tolerance leaves, docs/estimator.md)."""
+    y, s, _ = sequence()
+    hostile, reference = estimator(), estimator()
+    for k in range(SAMPLES):
+        bad = {60: 1e300, 90: 1e9}.get(k)
+        if bad is None:
+            result, expected = hostile.update(y[k], s[k]), reference.update(y[k], s[k])
+            assert result.status is SolveStatus.SOLVED
+            if k < 60:
+                assert np.array_equal(result.window_pct, expected.window_pct), k
+            else:
+                assert result.window_pct == pytest.approx(expected.window_pct, abs=0.05), k
+        else:
+            previous = result
+            result = hostile.update(np.full(6, bad), s[k])
+            reference.update(y[k], s[k], np.zeros(6, dtype=bool))
+            assert result.status is SolveStatus.INVALID_DATA
+            assert np.array_equal(result.fault_pct, previous.fault_pct)
+
+
+@pytest.mark.timeout(60)
+def test_reset_starts_over_exactly_like_a_new_estimator():
+    """After reset (a restarted source) the estimator gives, to the last digit, what a new
+    one gives on the same data: nothing of the first flight is left in it."""
+    y, s, _ = sequence()
+    restarted = estimator()
+    for k in range(SAMPLES):
+        restarted.update(y[k], s[k])
+    restarted.reset()
+    new = estimator()
+    y2, s2, _ = sequence(seed=1)
+    for k in range(SAMPLES):
+        expected, result = new.update(y2[k], s2[k]), restarted.update(y2[k], s2[k])
+        assert result.status is expected.status
+        assert np.array_equal(result.window_pct, expected.window_pct)
+    assert result.columns(["fault_1", "fault_0"]) == [1, 0]
+
+
+def test_status_codes_are_the_messages():
+    """SolveStatus is the one home of the status codes: each equals FaultEstimate's constant
+    of its name, and the message has no other."""
+    from uav_fault_msgs.msg import FaultEstimate
+
+    constants = {name[len("STATUS_"):]: getattr(FaultEstimate, name)
+                 for name in dir(FaultEstimate) if name.startswith("STATUS_")}
+    assert constants == {status.name: status.value for status in SolveStatus}

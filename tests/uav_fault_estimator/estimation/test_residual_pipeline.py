@@ -1,0 +1,220 @@
+"""The residual pipeline on a model whose true accelerations are known in closed form.
+
+The test double's "aircraft" accelerates as a(t) = A sin(w t) + B f with time carried in
+the latitude channel, so the observed derivative, the prediction and S can be checked
+against exact values, without JSBSim.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from uav_common.channels import STATE_CHANNELS
+from uav_fault_estimator.estimation.residuals import ResidualGenerator
+from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampMatcher, StampVerdict
+from uav_sim.filters import LowPass
+
+FAULTS = ("right_wing_lift_loss", "left_wing_drag_increase")
+AMPLITUDE = np.array([0.5, -0.3, 0.8, 0.05, -0.02, 0.03])   # A [m/s^2, rad/s^2]
+OMEGA_RADPS = 0.7
+SIGNATURE = np.array([                                       # B per % of each fault
+    [0.00, -0.02], [0.00, 0.00], [0.09, 0.00], [0.20, 0.00], [0.00, 0.00], [0.00, -0.04],
+])
+CURVATURE = 1e-4   # a quadratic term, so that the secant step matters a little
+DT_S, TAU_A_S = 0.05, 4.0
+LAT, VEL = STATE_CHANNELS.index("latitude"), [6, 7, 8, 9, 10, 11]
+
+
+def true_acceleration(time_s: float, fault_pct: np.ndarray) -> np.ndarray:
+    return AMPLITUDE * math.sin(OMEGA_RADPS * time_s) + SIGNATURE @ fault_pct + CURVATURE * (
+        SIGNATURE @ fault_pct**2
+    )
+
+
+def factory(faults_pct):
+    vector = np.array([faults_pct.get(name, 0.0) for name in FAULTS])
+    return lambda state, _controls, _wind: true_acceleration(state[LAT], vector)
+
+
+def state_at(time_s: float, fault_pct: np.ndarray) -> np.ndarray:
+    """Attitude zero (body = NED), velocity the exact integral of the true acceleration."""
+    state = np.zeros(len(STATE_CHANNELS))
+    state[LAT] = time_s
+    linear = SIGNATURE @ fault_pct + CURVATURE * (SIGNATURE @ fault_pct**2)
+    state[VEL] = -AMPLITUDE / OMEGA_RADPS * math.cos(OMEGA_RADPS * time_s) + linear * time_s
+    return state
+
+
+def generator(**overrides) -> ResidualGenerator:
+    settings = dict(secant_step_pct=1.0, tau_a_s=TAU_A_S, sensitivity_period_s=0.5,
+                    recovery_s=3 * TAU_A_S)
+    settings.update(overrides)
+    return ResidualGenerator(factory, FAULTS, **settings)
+
+
+def fly(gen: ResidualGenerator, fault_pct, duration_s: float, dropout=None):
+    samples = []
+    for k in range(round(duration_s / DT_S) + 1):
+        time_s = k * DT_S
+        state = state_at(time_s, np.asarray(fault_pct, dtype=float))
+        if dropout and dropout[1] <= time_s < dropout[2]:
+            state[STATE_CHANNELS.index(dropout[0])] = np.nan
+        samples.append(gen.update(time_s, state, np.zeros(7), np.zeros(3)))
+    return samples
+
+
+@pytest.mark.timeout(30)
+def test_low_pass_is_the_exact_step_response() -> None:
+    low_pass = LowPass(tau_s=2.0)
+    low_pass.update(np.array([0.0]), 0.1)
+    for _ in range(30):
+        output = low_pass.update(np.array([1.0]), 0.1)
+    assert output[0] == pytest.approx(1.0 - math.exp(-3.0 / 2.0), rel=1e-12)
+
+
+@pytest.mark.timeout(30)
+def test_fault_free_residual_vanishes_and_faulty_one_is_s_f() -> None:
+    fault_free = fly(generator(), [0.0, 0.0], 30.0)[-1]
+    faulty = fly(generator(), [10.0, 5.0], 30.0)[-1]
+    print("fault-free |y| =", np.abs(fault_free.residual).max(), " faulty y =", faulty.residual)
+    assert np.abs(fault_free.residual).max() < 1e-4
+    assert faulty.valid.all()
+    # the secant S differs from B by the curvature term: CURVATURE * s * B per column
+    assert faulty.sensitivity == pytest.approx(SIGNATURE * (1 + CURVATURE * 1.0), abs=1e-9)
+    fitted = faulty.sensitivity @ np.array([10.0, 5.0])
+    assert np.linalg.norm(faulty.residual - fitted) / np.linalg.norm(faulty.residual) < 0.01
+
+
+@pytest.mark.timeout(30)
+def test_a_dropout_invalidates_the_rows_that_need_the_channel_then_recovers() -> None:
+    samples = fly(generator(recovery_s=5.0), [10.0, 5.0], 40.0,
+                  dropout=("pitch_rate", 20.0, 25.0))
+    by_time = {round(sample.time_s, 2): sample for sample in samples if sample is not None}
+    assert by_time[19.9].valid.all()
+    assert list(by_time[22.0].valid) == [True, True, True, True, False, True]
+    assert not by_time[29.9].valid[4] and by_time[30.0].valid.all()
+
+
+@pytest.mark.timeout(30)
+def test_time_going_backwards_is_refused_until_reset() -> None:
+    gen = generator()
+    fly(gen, [0.0, 0.0], 1.0)
+    with pytest.raises(ValueError, match="reset first"):
+        gen.update(0.5, state_at(0.5, np.zeros(2)), np.zeros(7), np.zeros(3))
+    gen.reset()
+    assert gen.update(0.5, state_at(0.5, np.zeros(2)), np.zeros(7), np.zeros(3)) is None
+
+
+@pytest.mark.timeout(30)
+def test_stamp_matcher_releases_complete_sets_in_stamp_order() -> None:
+    matcher = StampMatcher(("state", "controls"))
+    assert matcher.add("state", 200, "s2") == []
+    assert matcher.add("state", 100, "s1") == []
+    assert matcher.add("controls", 200, "c2") == [(200, {"state": "s2", "controls": "c2"})]
+    assert matcher.dropped_sets == 1  # stamp 100 never got its controls
+    assert matcher.guard.newest_ns == 200  # the newest released stamp
+
+
+@pytest.mark.timeout(30)
+def test_an_optional_stream_is_waited_for_until_late_lost_or_waited_out() -> None:
+    published = {"air": True}
+    matcher = StampMatcher(("state",), ("air",), lambda stream: published[stream],
+                           optional_wait=2)
+    assert matcher.add("state", 100, "s1") == []                      # air may still come
+    assert matcher.add("air", 100, "a1") == [(100, {"state": "s1", "air": "a1"})]
+    assert matcher.add("state", 200, "s2") == []
+    assert matcher.add("state", 300, "s3") == []
+    assert matcher.add("state", 400, "s4") == [(200, {"state": "s2"})]  # air of 200 late...
+    assert matcher.add("air", 200, "a2") == [] and matcher.late_optional == 1
+    assert matcher.add("air", 400, "a4") == [(300, {"state": "s3"}),  # ...300's lost: 400's came
+                                             (400, {"state": "s4", "air": "a4"})]
+    assert matcher.guard.newest_ns == 400
+    published["air"] = False  # its publisher gone: what it sent may still be queued
+    assert matcher.add("state", 500, "s5") == []
+    assert matcher.add("air", 500, "a5") == [(500, {"state": "s5", "air": "a5"})]
+    assert matcher.add("state", 600, "s6") == []
+    assert matcher.add("state", 700, "s7") == []
+    assert matcher.add("state", 800, "s8") == [(600, {"state": "s6"}),  # waited out...
+                                               (700, {"state": "s7"}), (800, {"state": "s8"})]
+    assert matcher.add("state", 900, "s9") == [(900, {"state": "s9"})]  # ...then not waited for
+    assert matcher.dropped_sets == 0
+
+
+@pytest.mark.timeout(30)
+def test_an_optional_stream_never_heard_from_is_not_waited_for_without_a_publisher() -> None:
+    matcher = StampMatcher(("state",), ("air",), lambda stream: False, optional_wait=2)
+    assert matcher.add("state", 100, "s1") == [(100, {"state": "s1"})]
+    assert matcher.add("air", 200, "a2") == []
+    matcher.reset()  # heard before the restart: not after it
+    assert matcher.add("state", 100, "s1") == [(100, {"state": "s1"})]
+
+
+@pytest.mark.timeout(30)
+def test_a_non_finite_prediction_skips_the_sample_and_keeps_the_state() -> None:
+    def factory_with_a_hole(faults_pct):
+        model = factory(faults_pct)
+        return lambda state, controls, wind: (
+            np.full(6, np.nan) if abs(state[LAT] - 5.0) < 1e-9 else model(state, controls, wind)
+        )
+
+    gen = ResidualGenerator(factory_with_a_hole, FAULTS, secant_step_pct=1.0, tau_a_s=TAU_A_S,
+                            sensitivity_period_s=0.5, recovery_s=0.0)
+    reference = generator(recovery_s=0.0)
+    for k in range(round(10.0 / DT_S) + 1):
+        time_s = k * DT_S
+        state = state_at(time_s, np.array([10.0, 5.0]))
+        expected = reference.update(time_s, state, np.zeros(7), np.zeros(3))
+        if abs(time_s - 5.0) < 1e-9:
+            with pytest.raises(ValueError, match="non-finite"):
+                gen.update(time_s, state, np.zeros(7), np.zeros(3))
+            continue
+        sample = gen.update(time_s, state, np.zeros(7), np.zeros(3))
+    # one interval of twice the length instead of two: the filters barely notice
+    assert np.all(np.isfinite(sample.residual))
+    assert sample.residual == pytest.approx(expected.residual, abs=1e-3)
+
+
+@pytest.mark.timeout(30)
+def test_a_stray_stamp_is_dropped_and_only_a_run_of_them_is_a_restart() -> None:
+    s = 1_000_000_000
+    guard = StampGuard(confirm_stamps=3, max_ahead_s=10.0)
+    verdicts = []
+    for stamp in (1 * s, 2 * s, 2 * s, 1 * s, 3 * s,   # a duplicate, one back: strays
+                  50 * s, 4 * s,                         # one far ahead: a stray
+                  1 * s, 1 * s, 2 * s, 3 * s, 4 * s):    # three distinct in a row: a restart
+        verdict = guard.check(stamp)
+        verdicts.append(verdict.value)
+        if verdict is not StampVerdict.STRAY:
+            guard.accept(stamp)
+    assert verdicts == ["accept", "accept", "stray", "stray", "accept", "stray", "accept",
+                        "stray", "stray", "stray", "restart", "accept"]
+    assert guard.newest_ns == 4 * s
+
+
+@pytest.mark.timeout(30)
+def test_the_residual_models_are_rebuilt_after_giving_nan() -> None:
+    """A model copy that once gives NaN is made anew (a JSBSim instance can keep giving it):
+    the sample is refused, the next one is evaluated by fresh copies."""
+    built = []
+
+    def poisonable(faults_pct):
+        model = factory(faults_pct)
+        built.append(model)
+        return lambda state, controls, wind: (np.full(6, np.nan) if len(built) <= 3
+                                              and state[LAT] >= 1.0 else model(state, controls,
+                                                                                wind))
+
+    gen = ResidualGenerator(poisonable, FAULTS, secant_step_pct=1.0, tau_a_s=TAU_A_S,
+                            sensitivity_period_s=0.5, recovery_s=1.0)
+    times = [k * DT_S for k in range(40)]
+    outcomes = []
+    for time_s in times:
+        try:
+            gen.update(time_s, state_at(time_s, np.zeros(2)), np.zeros(7), np.zeros(3))
+            outcomes.append("ok")
+        except ValueError:
+            outcomes.append("refused")
+    assert outcomes.count("refused") == 1 and gen.model_rebuilds == 1
+    assert len(built) == 6  # three copies, then three new ones

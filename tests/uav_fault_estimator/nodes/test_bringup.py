@@ -1,0 +1,89 @@
+"""scripts/bringup.sh: the nodes live under a namespace, and Ctrl-C on the script alone
+stops every one of them; two aircraft in one domain, ending when both have landed."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import pytest
+from helpers.process_table import NODE_NAMES, kill_all, processes
+from helpers.repo import SCRIPTS
+from uav_common.message_fields import stamp_seconds
+from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros_processes import wait_until
+from uav_fault_msgs.msg import FaultEstimate
+
+pytestmark = pytest.mark.integration
+
+BRINGUP = SCRIPTS / "bringup.sh"
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_bringup_runs_the_nodes_and_ctrl_c_stops_them_all(
+        start_process, short_scenario, graph, ros_domain, tmp_path) -> None:
+    logs = tmp_path / "logs"
+
+    def leftovers() -> list:
+        return processes(lambda info: str(logs) in info.cmdline or (
+            any(name in info.cmdline for name in NODE_NAMES)
+            and info.environ.get("ROS_DOMAIN_ID") == str(ros_domain)))
+
+    estimates = graph.subscribe({"/uav2/faults/estimate": FaultEstimate}, STREAM_QOS)[
+        "/uav2/faults/estimate"]
+    bringup = start_process([str(BRINGUP), "--ns", "/uav2", "--scenario",
+                             str(short_scenario(60.0)), "--logs", str(logs)], "bringup")
+    try:
+        graph.spin(60.0, until=lambda: len(estimates) >= 2 or not bringup.running())
+        assert len(estimates) >= 2, bringup.output()
+        assert estimates[-1].names == list(estimates[0].names)
+        output = bringup.output()
+        assert str(logs) in output and "ros2 topic echo /uav2/faults/estimate" in output
+        assert {path.name for path in logs.glob("*_node.log")} == {
+            "sim_node.log", "residual_node.log", "mhe_node.log", "detector_node.log"}
+
+        os.kill(bringup.pid, signal.SIGINT)  # the script only, not its group
+        assert bringup.wait(15) == 130, bringup.output()
+        assert wait_until(lambda: not leftovers(), timeout_s=1.0), leftovers()
+        print(bringup.output())
+    finally:
+        kill_all(leftovers())
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
+        start_process, short_scenario, graph, tmp_path) -> None:
+    logs = tmp_path / "logs"
+    topics = {f"/uav{k}/faults/estimate": FaultEstimate for k in (1, 2)}
+    estimates = graph.subscribe(topics, STREAM_QOS)
+    # the leading simulator at 10 times real time; each simulator starts once its vehicle's
+    # residual_node and detector_node take its state (a live bringup does not wait: the
+    # first samples of a 1 s flight would go to discovery)
+    fast = tmp_path / "fast.yaml"
+    fast.write_text("/**/sim_node:\n  ros__parameters:\n    real_time_factor: 10.0\n"
+                    "    wait_for_subscribers: 2\n")
+    scenarios = [str(short_scenario(10.0)), str(short_scenario(10.0, faults=[]))]
+    bringup = start_process([str(BRINGUP), "--scenario", scenarios[0], "--scenario",
+                             scenarios[1], "--params", str(fast), "--logs", str(logs)],
+                            "bringup")
+    assert bringup.wait(60) == 0, bringup.output()
+    graph.spin(5.0)  # the last estimates may still be on their way
+    output = bringup.output()
+    print(output)
+    assert "every sim_node finished its scenario" in output
+    # mhe_node may still miss a residual or two to discovery, never the end
+    ends = [stamp_seconds(received[-1].header.stamp) for received in estimates.values()]
+    counts = [len(received) for received in estimates.values()]
+    print("estimates received:", counts, "last stamps:", ends)
+    assert ends == [10.0, 10.0] and min(counts) >= 15
+    assert {str(path.relative_to(logs)) for path in logs.glob("*/*_node.log")} == {
+        f"uav{k}/{name}.log" for k in (1, 2)
+        for name in ("sim_node", "residual_node", "mhe_node", "detector_node")}
+    assert "following /clock" in (logs / "uav2/sim_node.log").read_text()
+    assert "real-time factor 10" in (logs / "uav1/sim_node.log").read_text()
+    refused = start_process([str(BRINGUP), "--ns", "/a", "--scenario", scenarios[0],
+                             "--scenario", scenarios[1]], "refused")
+    assert refused.wait(10) == 2
+    assert "--ns names the namespace of one aircraft" in refused.output()

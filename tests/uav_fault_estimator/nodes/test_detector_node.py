@@ -1,0 +1,66 @@
+"""detector_node as a process beside sim_node: an alarm message on every 0.2 s sample
+with the calibration's thresholds, the same alarms the core makes offline, and a
+calibration that does not fit the node's parameters refused with one line."""
+
+from __future__ import annotations
+
+import subprocess
+
+import numpy as np
+import pytest
+from uav_common.message_fields import stamp_seconds
+from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
+from uav_fault_estimator.detection.calibration import CHANNELS
+from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.detector import SelfTuningDetector, run_detector
+from uav_fault_estimator.offline import fly_on_grid
+from uav_fault_msgs.msg import FaultAlarm
+from uav_sim.scenario import load_scenario
+
+pytestmark = pytest.mark.integration
+
+DURATION_S = 60.0  # the RLS settles after 30 s: half of the flight is tested
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(180)
+def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, start_process):
+    alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
+    start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
+    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
+    scenario = short_scenario(DURATION_S)
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
+        scenario, subscribers=1)), "sim_node")
+    assert sim.wait(timeout_s=90) == 0, sim.output()
+    expected = round(DURATION_S / 0.2)  # every grid sample but the first (no r[k-1] yet)
+    graph.spin(30.0, until=lambda: len(alarms) >= expected)
+
+    stamps = np.array([stamp_seconds(m.header.stamp) for m in alarms])
+    np.testing.assert_allclose(stamps, 0.2 * np.arange(1, expected + 1), atol=1e-9)
+    assert all(list(m.channel_names) == list(CHANNELS) for m in alarms)
+    # the same numbers as the core's offline run of the same flight
+    calibration = load_calibration("", window=25, forgetting_factor=0.995)
+    offline = run_detector(calibration, fly_on_grid(load_scenario(scenario), 0.2)[:3], 0.01)
+    np.testing.assert_allclose([m.statistic for m in alarms],
+                               [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
+    assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
+    detector = SelfTuningDetector(calibration, 0.01)
+    np.testing.assert_allclose(alarms[-1].threshold, detector.thresholds, rtol=1e-12)
+    settled = [m for m in alarms if np.isfinite(m.statistic).all()]
+    print(f"{len(alarms)} alarm messages, {len(settled)} with every test running; "
+          f"GLRT alarms {np.sum([m.alarm for m in settled], axis=0)}, parameter alarms "
+          f"{sum(m.parameter_alarm for m in settled)}, combined "
+          f"{sum(m.combined_alarm for m in settled)}")
+    assert len(settled) == round((DURATION_S - 30.0) / 0.2) + 1  # from 30 s on, both ends
+
+
+@pytest.mark.timeout(60)
+def test_a_calibration_for_another_window_is_refused_with_one_line():
+    result = subprocess.run(
+        ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=["-p", "window:=40"]),
+        capture_output=True, text=True, timeout=50)
+    assert result.returncode == 2, result  # bad input
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr
+    assert "was made for window 25" in lines[0] and "calibrate_detector.py" in lines[0]

@@ -1,0 +1,130 @@
+"""log_replay_node as a process: a simulated aileron-fault flight written as a PX4 ULog and as
+a ROS 1 MAVROS bag (PWM outputs at 2.9 Hz, rates at 10 Hz, jittered; FLU in the bag),
+replayed as fast as detector_node keeps up, gives the alarms the core's offline run of the
+same log gives; a bad log or airframe is one line and status 2."""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import simulated_logs
+from helpers.simulated_logs import FIXTURE_AIRFRAME
+from uav_common.message_fields import air_data_array, stamp_seconds
+from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros_processes import ros2_run_argv
+from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.flight_logs.airframe import load_airframe
+from uav_fault_estimator.flight_logs.readers import read_log
+from uav_fault_estimator.flight_logs.resample import detector_samples
+from uav_fault_msgs.msg import AircraftState, AirData, FaultAlarm
+from uav_sim.paths import scenarios_dir
+from uav_sim.scenario import load_scenario
+
+pytestmark = pytest.mark.integration
+
+DURATION_S = 60.0  # the detector settles after 30 s
+FAULT_START_S = 40.0  # the aileron loss, moved from 150 s into the flight
+SEED = 17
+
+
+@pytest.fixture(scope="module")
+def aileron_fault_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, float]]:
+    """The aileron-loss scenario, cut to DURATION_S with its fault at FAULT_START_S, as a
+    PX4 ULog and a MAVROS bag with the fixture airframe's PWM outputs (about 1 s): by
+    suffix, the file and its first log time [s of simulation time]."""
+    scenario = load_scenario(scenarios_dir() / "aileron_loss.yaml")
+    (fault,) = scenario.faults
+    scenario = dataclasses.replace(scenario, duration_s=DURATION_S, faults=(
+        dataclasses.replace(fault, start_s=FAULT_START_S),))
+    truth = simulated_logs.simulate_truth(scenario, SEED)
+    folder = tmp_path_factory.mktemp("replay")
+    simulated_logs.write_ulog(folder / "aileron_fault.ulg", truth)
+    bag_start_s = simulated_logs.write_mavros_bag(folder / "aileron_fault.bag", truth, SEED)
+    return {"ulg": (folder / "aileron_fault.ulg", 0.0),
+            "bag": (folder / "aileron_fault.bag", bag_start_s)}
+
+
+@pytest.fixture
+def aileron_fault_ulog(aileron_fault_logs) -> Path:
+    return aileron_fault_logs["ulg"][0]
+
+
+def replay_argv(log: Path, airframe: Path | None, *extra: str) -> list[str]:
+    """log_replay_node's command line (airframe None: the default, none)."""
+    airframe_args = [] if airframe is None else ["-p", f"airframe:={airframe}"]
+    return ros2_run_argv("uav_fault_estimator", "log_replay_node", ros_args=[
+        "-p", f"log:={log}", *airframe_args, *extra])
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("suffix", ["ulg", "bag"])
+def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
+        suffix, aileron_fault_logs, graph, start_process):
+    log, start_s = aileron_fault_logs[suffix]
+    # this test takes state too, so that the replay waits for it as for detector_node: its
+    # air_data reader is then matched before the first message
+    topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/air_data": AirData,
+                              "/state": AircraftState}, STREAM_QOS)
+    alarms, air_data = topics["/faults/alarm"], topics["/air_data"]
+    start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
+    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
+    replay = start_process(replay_argv(log, FIXTURE_AIRFRAME,
+                                       "-p", "real_time_factor:=0",
+                                       "-p", "wait_for_subscribers:=2"), "log_replay_node")
+    assert replay.wait(timeout_s=40) == 0, replay.output()
+
+    inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
+    offline = run_detector(load_calibration("", 25, 0.995), inputs.flight, 0.01)
+    graph.spin(20.0, until=lambda: len(alarms) >= len(offline)
+               and len(air_data) >= inputs.times_s.size)
+    assert [stamp_seconds(m.header.stamp) for m in alarms] == pytest.approx(
+        [s.time_s for s in offline], abs=1e-9)
+    np.testing.assert_allclose([m.statistic for m in alarms],
+                               [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose([m.parameter_deviation for m in alarms],
+                               [s.parameter_deviation for s in offline], rtol=1e-9,
+                               equal_nan=True)
+    assert [list(m.alarm) for m in alarms] == [s.alarm.tolist() for s in offline]
+    assert [m.parameter_alarm for m in alarms] == [s.parameter_alarm for s in offline]
+    assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
+    # air_data: the log's airspeed on every grid point, the vanes' angles missing
+    received = np.array([air_data_array(m) for m in air_data])
+    np.testing.assert_allclose(received[:, 0], inputs.airspeed_mps, rtol=1e-12,
+                               equal_nan=True)
+    assert np.isnan(received[:, 1:]).all()
+    # the resampling's warnings, each said once (the 2.9 Hz outputs are slower than the grid)
+    output = replay.output()
+    assert output.count("stream outputs is slower than the detector's grid") == 1, output
+    combined = [m for m in alarms if m.combined_alarm]
+    print(f"{log.name}: {inputs.times_s.size} grid samples replayed, {len(alarms)} alarm messages "
+          f"(offline {len(offline)}); GLRT alarms {np.sum([m.alarm for m in alarms], axis=0)}, "
+          f"parameter alarms {sum(m.parameter_alarm for m in alarms)}, combined "
+          f"{len(combined)}, the first at "
+          f"{stamp_seconds(combined[0].header.stamp) if combined else float('nan'):.1f} s "
+          f"(fault at {FAULT_START_S - start_s:g} s of log time)")
+    assert combined and stamp_seconds(combined[0].header.stamp) >= FAULT_START_S - start_s
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("case", ["missing_log", "no_airframe_for_outputs", "bad_airframe"])
+def test_a_bad_log_or_airframe_is_one_line_and_status_2(case, aileron_fault_ulog, tmp_path):
+    bad_airframe = tmp_path / "airframe.yaml"
+    bad_airframe.write_text("name: x\noutput_unit: pwm_us\n")  # no surfaces
+    log, airframe, expected = {
+        "missing_log": (tmp_path / "none.ulg", FIXTURE_AIRFRAME, "no such file or folder"),
+        "no_airframe_for_outputs": (aileron_fault_ulog, None, "need an airframe file"),
+        "bad_airframe": (aileron_fault_ulog, bad_airframe, str(bad_airframe)),
+    }[case]
+    result = subprocess.run(replay_argv(log, airframe), capture_output=True, text=True,
+                            timeout=50)
+    assert result.returncode == 2, result
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("log_replay_node: "), result.stderr
+    assert expected in lines[0], lines[0]
