@@ -1,0 +1,314 @@
+#!/usr/bin/env python3
+"""Write docs/results.md, the measured figures, from the JSON files the benchmarks, the
+studies and the demo write into docs/.
+
+    python tools/results_page.py            # (re)write docs/results.md
+    python tools/results_page.py --check    # exit 1 when docs/results.md is out of date
+
+One section per source, each saying which command regenerates its JSON; a source whose
+JSON is missing says so and how to make it. The page is a pure function of the JSON files
+(no dates, no machine names), so --check tells whether someone changed a JSON file without
+regenerating the page, or edited the page by hand. No ROS here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+DOCS = REPO_ROOT / "docs"
+PAGE = "results.md"
+# metrics.json files of demo runs, copied into docs/: demo_<scenario>.json
+DEMO_PATTERN = "demo_*.json"
+
+Renderer = Callable[[Any], list[str]]
+
+
+def number(value: Any) -> str:
+    """A figure as the tables show it: 4 significant digits, '-' for none."""
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if value == 0.0 or not math.isfinite(value):
+            return f"{value:g}"
+        if 1e-3 <= abs(value) < 1e5:
+            return f"{value:.4g}"
+        return f"{value:.2e}"
+    if isinstance(value, list | tuple):
+        return ", ".join(number(item) for item in value) or "-"
+    return str(value)
+
+
+def table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> list[str]:
+    """A markdown table; cells that are not strings are formatted by number(), and a "|"
+    in a cell is escaped."""
+    def line(cells: Iterable[str]) -> str:
+        return "| " + " | ".join(cell.replace("|", "\\|") for cell in cells) + " |"
+
+    lines = [line(header), "|" + "---|" * len(header)]
+    for row in rows:
+        lines.append(line(cell if isinstance(cell, str) else number(cell) for cell in row))
+    return [*lines, ""]
+
+
+def key_values(data: Mapping[str, Any], keys: Iterable[str] | None = None) -> list[str]:
+    """A two-column table of the mapping's scalar entries (or of `keys`, in that order)."""
+    names = list(keys) if keys is not None else [
+        key for key, value in data.items() if not isinstance(value, dict | list)]
+    return table(("figure", "value"), ((f"`{key}`", data.get(key)) for key in names))
+
+
+# --- the estimator benchmark (benchmarks/bench_mhe.py) ---------------------------------
+
+
+def _solvers(solvers: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    return table(("solver", "tolerance", "median [ms]", "p99 [ms]", "deviation"), (
+        (name, "exact" if entry.get("eps") is None else number(entry["eps"]),
+         entry.get("median_ms"), entry.get("p99_ms"), entry.get("max_deviation"))
+        for name, entry in solvers.items()))
+
+
+def _against(data: Mapping[str, Any], what: str, label: str) -> list[str]:
+    """Median and p99 per horizon or fault count, ProxSuite and the active set."""
+    median, p99 = data.get(f"{what}_median_ms", {}), data.get(f"{what}_p99_ms", {})
+    active_median = data.get(f"active_set_{what}_median_ms", {})
+    active_p99 = data.get(f"active_set_{what}_p99_ms", {})
+    return table((label, "ProxSuite median [ms]", "ProxSuite p99 [ms]",
+                  "active set median [ms]", "active set p99 [ms]"), (
+        (key, median.get(key), p99.get(key), active_median.get(key), active_p99.get(key))
+        for key in sorted(median, key=float)))
+
+
+def bench_mhe(data: Mapping[str, Any]) -> list[str]:
+    lines = [f"The project's row: `{data.get('estimator')}`. Deviation: the largest "
+             "|x - x_ref| / max(1, |x_ref|) against the reference (Clarabel at 1e-12, "
+             "polished); times per update, the fastest of the passes over the same sequence.",
+             "", "### Solvers, four faults", ""]
+    lines += _solvers(data.get("solvers", {}))
+    if data.get("solvers_with_wind_errors"):
+        lines += ["### Solvers, with the wind-error columns", ""]
+        lines += _solvers(data["solvers_with_wind_errors"])
+    lines += ["### Against the horizon", "", "N residual samples in the window, p = 4, the "
+              "flown sequence.", ""]
+    lines += _against(data, "horizon", "N")
+    lines += ["### Against the fault count", "", "p estimated faults, N = 50, synthetic "
+              "sequences.", ""]
+    lines += _against(data, "fault_count", "p")
+    if data.get("anatomy"):
+        keys = ("update_ms", "proxsuite_setup_ms", "proxsuite_solve_ms", "iterations",
+                "penalty_updates")
+        lines += ["### Where the update goes", "", "ProxSuite's own timings; `median` over "
+                  "the updates, `slowest_1pct_mean` the mean of the slowest 1 %.", ""]
+        lines += table(("N", "updates", *keys), (
+            (entry.get("horizon"), group, *(entry.get(group, {}).get(key) for key in keys))
+            for entry in data["anatomy"] for group in ("median", "slowest_1pct_mean")))
+    if data.get("active_set_bound"):
+        lines += ["### Reduced to the active set", "", "Each window's QP with its known "
+                  "active set, solved by ProxSuite's dense backend.", ""]
+        lines += key_values(data["active_set_bound"])
+    if data.get("proxsuite_floor"):
+        lines += ["### ProxSuite from the exact solution", "", "ProxSuite handed each "
+                  "window's exact primal and dual solution: the floor of any warm start.", ""]
+        lines += key_values(data["proxsuite_floor"])
+    return lines
+
+
+# --- detectability (studies/detectability.py) -------------------------------------------
+
+
+def detectability(data: Mapping[str, Any]) -> list[str]:
+    lines = [f"{data.get('seeds')} flights per suite and turbulence (seeds from "
+             f"{data.get('first_seed')}); errors after {number(data.get('settle_s'))} s; "
+             f"threshold {number(data.get('threshold_pct'))} %. Fault-free largest: the "
+             "largest fault-free estimate over the flights (the smallest threshold free of "
+             f"false alarms on them); after start: the same after "
+             f"{number(data.get('start_s'))} s. RMS error and worst delay: the default "
+             "faults.", ""]
+    keys = ("fault_free_largest_pct", "fault_free_largest_after_start_pct", "rmse_mean_pct",
+            "rmse_worst_pct", "delay_worst_s")
+    rows = [(suite, turbulence, fault, *(figures.get(key) for key in keys))
+            for suite, levels in data.get("summary", {}).items()
+            for turbulence, faults in levels.items()
+            for fault, figures in faults.items()]
+    return lines + table(("suite", "turbulence", "fault", "fault-free largest [%]",
+                          "after start [%]", "RMS mean [%]", "RMS worst [%]",
+                          "worst delay [s]"), rows)
+
+
+# --- the soak (benchmarks/soak.py) --------------------------------------------------------
+
+
+def soak(data: Mapping[str, Any]) -> list[str]:
+    lines = key_values(data, ("duration_s", "seed", "events", "estimates_expected",
+                              "estimates_clean", "estimates_dirty", "residuals_injected",
+                              "settle_s", "stamps_outside", "stamps_inside", "wall_s"))
+    lost = ("estimates_lost_clean", "estimates_lost_dirty", "estimates_unexpected")
+    lines += table(("stamps", "count"), ((f"`{key}`", len(data.get(key) or [])) for key in lost))
+    lines += table(("largest difference of the disturbed estimates from the clean", "[%]",
+                    "at [s]"), (
+        (label, *(data.get(key) or (None, None)))
+        for label, key in (("outside the disturbed windows", "largest_error_outside_pct_at_s"),
+                           ("inside them", "largest_error_inside_pct_at_s"))))
+    times = data.get("event_times_s", {})
+    lines += table(("event", "count", "at [s]"), (
+        (kind, count, times.get(kind, [])) for kind, count in data.get("event_kinds", {}).items()))
+    start, end = data.get("memory_start_mb", {}), data.get("memory_end_mb", {})
+    return lines + table(("disturbed node", "memory at start [MB]", "memory at end [MB]"),
+                         ((node, start.get(node), end.get(node)) for node in start))
+
+
+# --- the airspeed schedule (studies/airspeed_schedule.py) -------------------------------
+
+CALIBRATIONS = ("one_airspeed", "unscheduled", "scheduled")
+TESTS = ("glrt_roll", "glrt_pitch", "glrt_yaw", "parameters", "combined")
+
+
+def airspeed_schedule(data: Mapping[str, Any]) -> list[str]:
+    lines = [f"False-alarm rate per sample against the designed "
+             f"{number(data.get('designed_false_alarm_probability'))}; calibrations: "
+             "`one_airspeed` (25 m/s alone), `unscheduled` and `scheduled` (from "
+             f"{data.get('calibration_flights_per_airspeed')} flights at each of "
+             f"{number(data.get('calibration_airspeeds_mps'))} m/s); "
+             f"{data.get('test_flights_per_airspeed')} fault-free test flights per airspeed.",
+             ""]
+    present = [name for name in CALIBRATIONS if name in data]
+    airspeeds = list(data[present[0]]["false_alarm_rates"]) if present else []
+    lines += table(("airspeed [m/s]", "calibration", *TESTS), (
+        (airspeed, name, *(data[name]["false_alarm_rates"][airspeed].get(test)
+                           for test in TESTS))
+        for airspeed in airspeeds for name in present))
+    delays = sorted({key for name in present for key in data[name]["aileron_loss_delay_s"]},
+                    key=float)
+    return lines + table(
+        ("calibration", *(f"aileron loss found after [s] at {key} m/s" for key in delays),
+         "roll gain spread"),
+        ((name, *(data[name]["aileron_loss_delay_s"].get(key) for key in delays),
+          data[name].get("roll_gain_std")) for name in present))
+
+
+# --- demo runs (metrics.json of scripts/demo.sh) ----------------------------------------
+
+
+def demo_run(metrics: Mapping[str, Any]) -> list[str]:
+    """One run's metrics.json: the demo's table, with its solver and pipeline figures."""
+    lines = [f"#### Scenario `{metrics.get('scenario')}`", "",
+             f"{number(metrics.get('duration_s'))} s, settle {number(metrics.get('settle_s'))}"
+             f" s, threshold {number(metrics.get('detection_threshold_pct'))} %; false "
+             f"alarms: {', '.join(metrics.get('false_alarms') or []) or 'none'}.", ""]
+    keys = ("seeded", "seeded_final_pct", "estimate_final_pct", "rmse_pct",
+            "max_abs_error_pct", "detection_delay_s")
+    lines += table(("fault", *keys), ((name, *(fault.get(key) for key in keys))
+                                      for name, fault in metrics.get("faults", {}).items()))
+    return lines + key_values(flattened({"solver": metrics.get("solver", {}),
+                                         "pipeline": metrics.get("pipeline", {})}))
+
+
+def flattened(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested mappings as one, their keys joined by dots (`pipeline.wall_s`)."""
+    flat: dict[str, Any] = {}
+    for key, value in data.items():
+        if isinstance(value, Mapping):
+            flat |= flattened(value, f"{prefix}{key}.")
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+@dataclass(frozen=True)
+class Section:
+    """One section of the page: its heading, the JSON file(s) it renders (a name in docs/,
+    or a glob), the command that regenerates them, and how to render one file."""
+
+    title: str
+    source: str
+    command: str
+    render: Renderer
+    text: str
+
+
+SECTIONS = (
+    Section("Demo runs", DEMO_PATTERN,
+            "./scripts/demo.sh SCENARIO.yaml --out runs/NAME && "
+            "cp runs/NAME/metrics.json docs/demo_NAME.json", demo_run,
+            "metrics.json of demo runs through the ROS graph (docs/design.md defines the "
+            "figures): one subsection per file docs/demo_NAME.json."),
+    Section("Estimator benchmark", "bench_mhe.json",
+            "python -m benchmarks.bench_mhe --updates 200 --json docs/bench_mhe.json", bench_mhe,
+            "The estimator's update against other QP solvers on the same windows "
+            "(docs/performance.md)."),
+    Section("Detectability", "detectability.json",
+            "python -m studies.detectability --json docs/detectability.json", detectability,
+            "Per sensor suite and turbulence, the default and fault_free scenarios flown "
+            "through the offline chain with the node defaults (docs/estimator.md)."),
+    Section("Soak", "soak.json", "python -m benchmarks.soak --json docs/soak.json", soak,
+            "A long flight replayed into a clean and a disturbed copy of the nodes, the "
+            "disturbed one given bad messages (docs/performance.md)."),
+    Section("Airspeed schedule", "airspeed_schedule.json",
+            "python -m studies.airspeed_schedule --json docs/airspeed_schedule.json",
+            airspeed_schedule,
+            "The detector calibrated at one airspeed, at several without and with the "
+            "airspeed schedule, and tested at airspeeds it did not see (docs/detector.md)."),
+)
+
+
+def section(docs: Path, entry: Section) -> list[str]:
+    """The section's lines: its heading, text, command and each source file's tables."""
+    lines = [f"## {entry.title}", "", entry.text, "", "Regenerate with (from the repository "
+             "root, after `source scripts/env.sh`):", "", "```sh", entry.command, "```", ""]
+    files = sorted(docs.glob(entry.source))
+    if not files:
+        return [*lines, f"Not measured in this checkout: no `docs/{entry.source}`. Run the "
+                "command above, then `python tools/results_page.py`.", ""]
+    for path in files:
+        lines += [f"Source: `docs/{path.name}`.", ""]
+        lines += entry.render(json.loads(path.read_text()))
+    return lines
+
+
+def render(docs: Path = DOCS) -> str:
+    """The whole page for the JSON files in docs."""
+    lines = ["# Results", "",
+             "Every measured figure of the project, generated by `python tools/results_page.py` "
+             "from the JSON files in docs/; do not edit by hand. Figures depend on the machine: "
+             "compare rows within one section, not across machines.", "",
+             *(f"- [{entry.title}](#{entry.title.lower().replace(' ', '-')})"
+               for entry in SECTIONS), ""]
+    for entry in SECTIONS:
+        lines += section(docs, entry)
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Write DOCS/results.md, or with --check compare it: the exit status."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true",
+                        help="exit 1 when the page differs from what would be generated")
+    parser.add_argument("--docs", type=Path, default=DOCS,
+                        help="folder of the JSON files and of results.md (default: docs/)")
+    arguments = parser.parse_args(argv)
+    page = arguments.docs / PAGE
+    wanted = render(arguments.docs)
+    if arguments.check:
+        if not page.is_file() or page.read_text() != wanted:
+            print(f"results_page.py: {page} is out of date: run python tools/results_page.py",
+                  file=sys.stderr)
+            return 1
+        return 0
+    page.write_text(wanted)
+    print(f"results_page.py: wrote {page}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
