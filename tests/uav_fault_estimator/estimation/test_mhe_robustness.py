@@ -85,6 +85,29 @@ def test_an_absurd_residual_is_left_out_like_a_lost_one():
 
 
 @pytest.mark.timeout(60)
+def test_a_huge_finite_sensitivity_is_left_out_like_a_lost_row():
+    """S = 1e300 (finite) on one channel of one sample, marked valid: INVALID_DATA, the last
+    good estimate kept, the row left out, and from the next update on what an estimator
+    gets that saw the row as lost, to the solver's accuracy (as for an absurd residual).
+    Without the S gate such a row reached the solver: seconds an update."""
+    y, s, _ = sequence()
+    hostile, reference = estimator(), estimator()
+    for k in range(SAMPLES):
+        if k != 60:
+            result, expected = hostile.update(y[k], s[k]), reference.update(y[k], s[k])
+            assert result.status is SolveStatus.SOLVED
+            assert result.window_pct == pytest.approx(expected.window_pct, abs=0.05), k
+            continue
+        previous, s_bad, lost = result, s[k].copy(), np.ones(6, dtype=bool)
+        s_bad[2, 0], lost[2] = 1e300, False
+        result = hostile.update(y[k], s_bad)
+        reference.update(y[k], s[k], lost)
+        print(f"the update with S = 1e300 took {result.update_time_ms:.3f} ms")
+        assert result.status is SolveStatus.INVALID_DATA
+        assert np.array_equal(result.fault_pct, previous.fault_pct)
+
+
+@pytest.mark.timeout(60)
 def test_reset_starts_over_exactly_like_a_new_estimator():
     """After reset (a restarted source) the estimator gives, to the last digit, what a new
     one gives on the same data: nothing of the first flight is left in it."""

@@ -5,6 +5,7 @@ the written instants, in FRD, with the PWM and the streams' rates as written."""
 from __future__ import annotations
 
 import dataclasses
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ import pytest
 from helpers import simulated_logs
 from helpers.simulated_logs import DOTTED, ROSTOPIC, LogTruth
 from rosbags.highlevel import AnyReader
+from uav_fault_estimator.flight_logs import csv_logs
 from uav_fault_estimator.flight_logs.readers import log_paths, read_log
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
@@ -184,3 +186,72 @@ def test_log_paths_expand_folders_one_level(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="no flight log in this folder") as raised:
         log_paths([tmp_path / "deeper"])
     assert "\n" not in str(raised.value)
+
+
+def edited_csv_folder(logs: Logs, tmp_path: Path, edit) -> tuple[Path, Path]:
+    """A copy of the dotted CSV export with edit(lines) applied to its rates file; the
+    folder and that file."""
+    folder = tmp_path / "csv"
+    shutil.copytree(logs.folder / f"csv_{DOTTED}", folder)
+    rates = next(path for path in folder.glob("*.csv") if "imu" in path.name)
+    lines = rates.read_text().splitlines()
+    rates.write_text("\n".join(edit(lines)) + "\n")
+    return folder, rates
+
+
+def with_time(lines: list[str], row: int, time_text: str) -> list[str]:
+    """lines with the log time (the first cell) of data row `row` replaced."""
+    cells = lines[row].split(",")
+    return [*lines[:row], ",".join([time_text, *cells[1:]]), *lines[row + 1:]]
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("time_text, said", [
+    ("1e300", "is not a log time"),
+    ("nan", "is not a log time"),
+    ("-7.5e9", "s after"),  # a negative time: back by 9e9 s
+    ("1.0", "s after"),  # back to the epoch's first second: out of order
+])
+def test_a_csv_time_cell_out_of_place_is_one_line_naming_file_and_row(
+        logs: Logs, tmp_path: Path, time_text: str, said: str) -> None:
+    """One log time of the rates file replaced (before, 1e300 was replayed to -7.52e9 s)."""
+    folder, rates = edited_csv_folder(logs, tmp_path, lambda lines: with_time(
+        lines, 40, time_text))
+    with pytest.raises(ValueError) as raised:
+        read_log(folder)
+    message = str(raised.value)
+    print(message)
+    assert message.startswith(f"{rates}: row 40: ") and said in message and "\n" not in message
+
+
+@pytest.mark.timeout(60)
+def test_a_csv_of_binary_data_or_too_large_is_one_line_naming_it(logs: Logs,
+                                                                  tmp_path: Path) -> None:
+    folder, rates = edited_csv_folder(logs, tmp_path, lambda lines: lines)
+    rates.write_bytes(bytes(range(256)) * 64)
+    with pytest.raises(ValueError, match=f"^{rates}: not a CSV text file"):
+        read_log(folder)
+    rates.write_bytes(b"")
+    with open(rates, "wb") as file:  # sparse: the size without the disk
+        file.truncate(csv_logs.MAX_FILE_BYTES + 1)
+    with pytest.raises(ValueError, match=f"^{rates}: 256 MiB, more than the 256 MiB"):
+        read_log(folder)
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("damage", ["truncated", "bit_flipped"])
+def test_a_damaged_ulog_is_read_with_a_warning_naming_it(logs: Logs, tmp_path: Path,
+                                                         damage: str) -> None:
+    data = bytearray((logs.folder / "flight.ulg").read_bytes())
+    if damage == "truncated":
+        data = data[: len(data) * 2 // 3 + 7]  # cut inside a message
+    else:
+        for offset in range(len(data) // 2, len(data) // 2 + 4000, 97):
+            data[offset] ^= 0xFF
+    path = tmp_path / f"{damage}.ulg"
+    path.write_bytes(bytes(data))
+    log = read_log(path)
+    print(log.warnings)
+    assert len(log.warnings) == 1 and str(path) in log.warnings[0]
+    assert "damaged ULog" in log.warnings[0]
+    assert read_log(logs.folder / "flight.ulg").warnings == ()

@@ -51,6 +51,9 @@ def test_mhe_node_takes_a_new_noise_factor_and_refuses_an_r_of_the_wrong_length(
     assert out_of_range.startswith("Setting parameter failed: "), out_of_range
     assert param_get("/mhe_node", "noise_variance_factor") == "Double value is: 2.5"
     assert "retuned: noise_variance_factor = 2.5" in node.output()
+    # An integer for a real is the real it names, as on the command line at start.
+    assert param_set("/mhe_node", "noise_variance_factor", "8") == "Set parameter successful"
+    assert param_get("/mhe_node", "noise_variance_factor") == "Double value is: 8.0"
     print("answers:", out_of_range)
 
 

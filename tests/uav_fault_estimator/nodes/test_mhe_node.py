@@ -7,10 +7,13 @@ import subprocess
 
 import numpy as np
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.messages import BODY_FRAME, header
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
+from uav_fault_estimator.estimation.noise_model import load_noise_calibration
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 
 pytestmark = pytest.mark.integration
@@ -72,3 +75,68 @@ def test_a_bad_fault_model_ends_mhe_node_with_one_message():
     assert "Traceback" not in result.stderr
     assert "mhe_node: fault left_wing_lift_loss: unknown model 'gaussian_mixture'" in (
         result.stderr)
+
+
+@pytest.mark.timeout(60)
+def test_an_unknown_fault_name_ends_mhe_node_with_one_message():
+    names = "[right_wing_lift_loss, right_wing_drag_increase, bogus_fault, left_wing_drag_increase]"
+    result = subprocess.run(
+        ros2_run_argv("uav_fault_estimator", "mhe_node", ros_args=["-p", f"fault_names:={names}"]),
+        capture_output=True, text=True, timeout=50,
+    )
+    assert result.returncode == 2  # bad input
+    assert "Traceback" not in result.stderr
+    lines = [line for line in result.stderr.splitlines() if "bogus_fault" in line]
+    print(lines)
+    assert len(lines) == 1 and "right_wing_lift_loss" in lines[0]
+
+
+def residual_message(k: int, sensitivity: np.ndarray, faults_pct: np.ndarray,
+                     noise_sd: np.ndarray, rng: np.random.Generator) -> Residuals:
+    """The k-th residual (stamped k · PERIOD_S) of y = S f + noise, air data flown."""
+    residual = sensitivity @ faults_pct + noise_sd * rng.normal(size=Residuals.CHANNELS)
+    return Residuals(header=header(k * PERIOD_S, BODY_FRAME), residual=residual.tolist(),
+                     valid=[True] * Residuals.CHANNELS, wind_source=Residuals.WIND_AIR_DATA,
+                     fault_names=list(PAPER_FAULT_NAMES), sensitivity=sensitivity.ravel().tolist())
+
+
+@pytest.mark.timeout(120)
+def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
+        graph, start_process):
+    """Published straight to mhe_node among 60 good residuals of a 5 % lift loss: one with a
+    wind_source outside the message's enum (an exception in the noise model before) and one
+    with S = 1e300 (seconds of solver time before). The first is dropped and counted on
+    /diagnostics, the second is INVALID_DATA with the last good estimate; the node keeps
+    running and ends at the lift loss."""
+    noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
+    rng = np.random.default_rng(3)
+    sensitivity = 2.0 * noise_sd[:, None] * rng.normal(size=(Residuals.CHANNELS, 4))
+    faults_pct = np.array([5.0, 0.0, 0.0, 0.0])
+    received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
+    estimates = received["/faults/estimate"]
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
+                                  DIAGNOSTICS_QOS)["/diagnostics"]
+    node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
+    publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
+    assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+    bad_source, huge_s, count = 20, 30, 60
+    for k in range(1, count + 1):
+        message = residual_message(k, sensitivity, faults_pct, noise_sd, rng)
+        if k == bad_source:
+            message.wind_source = 7
+        if k == huge_s:
+            message.sensitivity[0] = 1e300
+        publisher.publish(message)
+        graph.spin(5.0, until=lambda k=k: len(estimates) >= k - (k >= bad_source))
+    graph.spin(2.0)
+    assert node.running(), node.output()
+    stamps = {round(stamp_seconds(m.header.stamp) / PERIOD_S): m for m in estimates}
+    assert sorted(stamps) == [k for k in range(1, count + 1) if k != bad_source]
+    assert stamps[huge_s].solver_status == FaultEstimate.STATUS_INVALID_DATA
+    assert stamps[huge_s].values_pct == stamps[huge_s - 1].values_pct
+    print(f"S = 1e300: {stamps[huge_s].solve_time_ms:.3f} ms; final "
+          f"{np.round(estimates[-1].values_pct, 2)} %")
+    assert estimates[-1].values_pct[0] == pytest.approx(5.0, abs=1.0)
+    values = [{item.key: item.value for item in status.values}
+              for array in diagnostics for status in array.status if status.name == "/mhe_node"]
+    assert values and values[-1]["rejected_messages"] == "1"

@@ -177,6 +177,9 @@ def declare_parameters(
         kind = Parameter.Type.from_parameter_value(defaults[name])
         node.declare_parameter(name, values[name], _descriptor(kind, spec), ignore_override=True)
     values = {name: node.get_parameter(name).value for name in specs}
+    kinds = {name: Parameter.Type.from_parameter_value(defaults[name]) for name in specs}
+    node.add_pre_set_parameters_callback(
+        lambda parameters: [_widened(parameter, kinds) for parameter in parameters])
     live = {name: spec for name, spec in specs.items() if spec.live}
     if live:
         if apply_changes is None:
@@ -184,6 +187,17 @@ def declare_parameters(
         node.add_on_set_parameters_callback(
             lambda parameters: _set_live(parameters, live, values, apply_changes))
     return values
+
+
+def _widened(parameter: Parameter, kinds: Mapping[str, Parameter.Type]) -> Parameter:
+    """The pre-set callback's step: an integer (or integer array) set on a real (or real
+    array) parameter becomes the real it names, as at start (`ros2 param set ... 8`)."""
+    kind = kinds.get(parameter.name)
+    if kind is None or _WIDENED.get(parameter.type_) != kind:
+        return parameter
+    value = parameter.value
+    return Parameter(parameter.name, kind,
+                     float(value) if kind == Parameter.Type.DOUBLE else [float(v) for v in value])
 
 
 def _set_live(parameters: list[Parameter], live: Mapping[str, ParameterSpec],

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from uav_common.channels import PAPER_FAULT_NAMES
+from uav_common.channels import FAULT_NAMES, PAPER_FAULT_NAMES
 
 from uav_fault_estimator.estimation.fault_models import FaultModel, make_model
 from uav_fault_estimator.estimation.monotone_active_set import is_monotone
@@ -168,6 +168,10 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
     columns are the faults, then the wind-estimate errors when estimate_wind_errors. Q is
     the noise calibration's for air data (per sample the node may pass another suite's)."""
     names = list(parameters["fault_names"])
+    unknown = [name for name in names if name not in FAULT_NAMES]
+    if unknown or len(set(names)) != len(names) or not names:
+        raise ValueError(f"fault_names {names}: each once, at least one, of "
+                         + ", ".join(FAULT_NAMES))
     per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
                  "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2",
                  "arrival_floor_variances_pct2")

@@ -40,7 +40,10 @@ def stage_normal_equations(
 
 # A residual beyond this many noise standard deviations (Q^½) is a data error, not a fault:
 # losing a whole wing's lift moves the roll residual by about 200 of them (0.6 rad/s² per %
-# against Q^½ = 0.36 rad/s² with air data). Such a row is left out like a non-finite one.
+# against Q^½ = 0.36 rad/s² with air data). So is a sensitivity by which one percent of a
+# fault (or one m/s of a wind error) would move its residual by more: the roll row's is
+# about 1.7 per %. Such a row is left out like a non-finite one; a finite but huge S would
+# otherwise reach the solver (1e300: seconds an update).
 RESIDUAL_PLAUSIBLE_SIGMAS = 1e3
 
 
@@ -49,7 +52,8 @@ def sample_normal_equations(
 ) -> tuple[np.ndarray, np.ndarray, bool, bool]:
     """One residual sample's data term, with Q⁻¹ on the rows that are valid and finite and
     0 on the others (a lost channel, a non-finite or implausible value: left out of the fit;
-    implausible: |y| beyond RESIDUAL_PLAUSIBLE_SIGMAS noise deviations).
+    implausible: |y|, or |S| of one unit of a column, beyond RESIDUAL_PLAUSIBLE_SIGMAS noise
+    deviations).
 
     Inputs: y (m,) residuals; s (m, p) signatures [residual unit / %]; valid (m,) booleans
     or None for all; q_inv (m,) [1 / residual unit²]; columns p. Returns G (p, p) [1/%²],
@@ -61,8 +65,9 @@ def sample_normal_equations(
     keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
         return np.zeros((p, p)), np.zeros(p), False, False
-    plausible = np.abs(y) <= RESIDUAL_PLAUSIBLE_SIGMAS / np.sqrt(q_inv)  # NaN: False
-    finite = np.isfinite(y) & np.all(np.isfinite(s), axis=1) & plausible
+    limit = RESIDUAL_PLAUSIBLE_SIGMAS / np.sqrt(q_inv)
+    # Comparisons with NaN are False: a non-finite entry is implausible too.
+    finite = (np.abs(y) <= limit) & np.all(np.abs(s) <= limit[:, None], axis=1)
     weight = np.where(keep & finite, q_inv, 0.0)
     gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],
                                           np.where(finite[:, None], s, 0.0)[None], weight[None])

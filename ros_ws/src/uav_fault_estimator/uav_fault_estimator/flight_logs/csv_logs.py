@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import csv
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +31,15 @@ from uav_fault_estimator.flight_logs.topics import (
 )
 
 NANOSECONDS_ABOVE = 1e12  # a log time written as an integer above this is in nanoseconds
+# Largest CSV file read [bytes]: a file is read whole, at about seven times its size in
+# memory; an hour of a 50 Hz topic is about 60 MB.
+MAX_FILE_BYTES = 256 * 2**20
+# Log times (`time`) must be finite, below MAX_LOG_TIME_S (the year 5138) and in order:
+# back by at most TIME_BACK_TOLERANCE_S (exporters write rows of one instant out of
+# order), forward by at most MAX_TIME_STEP_S from one row to the next.
+MAX_LOG_TIME_S = 1e11
+TIME_BACK_TOLERANCE_S = 1.0
+MAX_TIME_STEP_S = 3600.0
 _STAMP_PAIRS = (("header.stamp.secs", "header.stamp.nsecs"),
                 ("header.stamp.sec", "header.stamp.nanosec"))
 
@@ -54,7 +63,8 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
               if topic_file_key(topic) in files}
     if not files:
         raise ValueError(f"{folder}: no CSV files (one a topic, named after it)")
-    log_times = [t for table in tables.values() for t in _log_times_ns(table)]
+    log_times = [t for topic, table in tables.items()
+                 for t in _named(files[topic_file_key(topic)], _log_times_ns, table)]
     start_ns = min(log_times) if log_times else min(
         (int(t) for table in tables.values() for t in _stamps_ns(table) if t > 0), default=0)
     merged = LogStreams()
@@ -76,10 +86,27 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
                      streams=merged.streams, airspeed_source=merged.airspeed_source)
 
 
+def _named(path: Path, read: Callable[[dict[str, list[str]]], np.ndarray],
+           table: dict[str, list[str]]) -> np.ndarray:
+    """read(table), its ValueError prefixed with the file's path."""
+    try:
+        return read(table)
+    except ValueError as error:
+        raise ValueError(f"{path}: {error.args[0]}") from None
+
+
 def _table(path: Path) -> dict[str, list[str]]:
-    """A CSV file's columns by field path (prefixes `%`, `field.` and `.` dropped)."""
-    with path.open(newline="") as file:
-        rows = list(csv.reader(file))
+    """A CSV file's columns by field path (prefixes `%`, `field.` and `.` dropped);
+    ValueError naming the file when it is too large, not text, or empty."""
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise ValueError(f"{path}: {size / 2**20:.0f} MiB, more than the {MAX_FILE_BYTES // 2**20}"
+                         " MiB a CSV file may have here: export a shorter span of the flight")
+    try:
+        with path.open(newline="") as file:
+            rows = list(csv.reader(file))
+    except (UnicodeDecodeError, csv.Error) as error:
+        raise ValueError(f"{path}: not a CSV text file ({error})") from None
     if not rows:
         raise ValueError(f"{path}: empty (expected a header row)")
     names = [re.sub(r"^%?(field)?\.?", "", name.strip()) for name in rows[0]]
@@ -124,8 +151,30 @@ def _log_times_ns(table: dict[str, list[str]]) -> np.ndarray:
     texts = table["time"]
     if all(re.fullmatch(r"\s*\d+\s*", text) for text in texts) and texts and \
             int(texts[0]) > NANOSECONDS_ABOVE:
-        return _integers(table, "time")
-    return np.round(_numbers(table, "time") * 1e9).astype(np.int64)
+        times_ns = _integers(table, "time")
+        _check_log_times(times_ns / 1e9)
+        return times_ns
+    times_s = _numbers(table, "time")
+    _check_log_times(times_s)
+    return np.round(times_s * 1e9).astype(np.int64)
+
+
+def _check_log_times(times_s: np.ndarray) -> None:
+    """ValueError naming the first row (1: the first after the header) whose log time [s]
+    is not finite, beyond MAX_LOG_TIME_S, or out of order."""
+    bad = ~(np.abs(times_s) < MAX_LOG_TIME_S)  # NaN too
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise ValueError(f"row {row + 1}: time {times_s[row]:.12g} is not a log time in "
+                         "seconds")
+    steps = np.diff(times_s)
+    jumps = (steps < -TIME_BACK_TOLERANCE_S) | (steps > MAX_TIME_STEP_S)
+    if jumps.any():
+        row = int(np.argmax(jumps)) + 1
+        raise ValueError(f"row {row + 1}: time {times_s[row]:.12g} s after "
+                         f"{times_s[row - 1]:.12g} s "
+                         f"(at most {TIME_BACK_TOLERANCE_S:g} s back or "
+                         f"{MAX_TIME_STEP_S:g} s forward from one row to the next)")
 
 
 def _array_field(table: dict[str, list[str]], name: str) -> np.ndarray:

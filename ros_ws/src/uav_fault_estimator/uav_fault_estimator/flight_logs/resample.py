@@ -211,10 +211,10 @@ def detector_samples(log: FlightLog, airframe: Airframe | None,
 
 def _warnings(log: FlightLog, airframe: Airframe | None, surfaces_name: str,
               surfaces: TimedSeries, period_s: float) -> list[str]:
-    """detector_samples' lines: streams absent or slower than the grid, an airspeed other
-    than the airframe names, mixed outputs the log contradicts."""
-    lines = [f"log {log.source}: no {name} stream (NaN on the grid)"
-             for name in (ATTITUDE, AIRSPEED) if name not in log.streams]
+    """detector_samples' lines: the reader's own, streams absent or slower than the grid, an
+    airspeed other than the airframe names, mixed outputs the log contradicts."""
+    lines = [*log.warnings, *(f"log {log.source}: no {name} stream (NaN on the grid)"
+                              for name in (ATTITUDE, AIRSPEED) if name not in log.streams)]
     streams = {name: log.streams[name] for name in (BODY_RATES, ATTITUDE, AIRSPEED)
                if name in log.streams}
     for name, series in {**streams, surfaces_name: surfaces}.items():

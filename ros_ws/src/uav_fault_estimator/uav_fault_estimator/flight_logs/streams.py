@@ -60,7 +60,9 @@ class FlightLog:
     """A flight as a reader found it: name (the file's stem), source (the path read), format
     ("ulog", "ros1_bag", "ros2_bag", "csv"), streams by name (STREAM_COLUMNS, OUTPUTS: those
     the log has), output_unit (OUTPUT_UNITS) of the OUTPUTS stream, airspeed_source
-    (AIRSPEED_SOURCES: which airspeed the AIRSPEED stream holds, "" when the log has none)."""
+    (AIRSPEED_SOURCES: which airspeed the AIRSPEED stream holds, "" when the log has none),
+    warnings: what the reader noticed and the user should know (each line names the log;
+    a damaged ULog read up to its damage)."""
 
     name: str
     source: str
@@ -68,6 +70,7 @@ class FlightLog:
     streams: Mapping[str, TimedSeries]
     output_unit: str = "pwm_us"
     airspeed_source: str = ""
+    warnings: tuple[str, ...] = ()
 
 
 def ordered_series(times_s: np.ndarray, values: np.ndarray,

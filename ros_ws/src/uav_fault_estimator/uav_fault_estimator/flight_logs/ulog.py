@@ -44,6 +44,7 @@ TOPICS = (RATES, ATTITUDE_TOPIC, AIRSPEED_TOPIC, PWM_OUTPUTS, SERVOS, MOTORS, CO
 AIRSPEED_FIELDS = (("true_airspeed_m_s", "true"), ("calibrated_airspeed_m_s", "calibrated"),
                    ("indicated_airspeed_m_s", "indicated"))
 US_PER_S = 1e6
+FILE_HEADER_BYTES, MESSAGE_HEADER_BYTES = 16, 3  # ULog: magic, version, timestamp; size, type
 
 
 def read_ulog(path: Path, axes: str = "FRD") -> FlightLog:
@@ -79,8 +80,21 @@ def read_ulog(path: Path, axes: str = "FRD") -> FlightLog:
                                   STREAM_COLUMNS[AIRSPEED]))
     outputs, output_unit = _outputs(data, start_us)
     add(OUTPUTS, outputs)
+    damaged = (f"log {path}: damaged ULog (truncated or corrupt data, pyulog): read up to "
+               "the damage and past what it could resynchronise on; samples may be missing",)
     return FlightLog(name=path.stem, source=str(path), format="ulog", streams=streams,
-                     output_unit=output_unit, airspeed_source=airspeed_source)
+                     output_unit=output_unit, airspeed_source=airspeed_source,
+                     warnings=damaged if log.file_corruption or _cut_short(path) else ())
+
+
+def _cut_short(path: Path) -> bool:
+    """Whether the file ends inside a message (a log cut short: pyulog stops there without
+    a word). Walks the messages' headers, each a uint16 payload size and a uint8 type."""
+    data = path.read_bytes()
+    offset = FILE_HEADER_BYTES
+    while offset + MESSAGE_HEADER_BYTES <= len(data):
+        offset += MESSAGE_HEADER_BYTES + int.from_bytes(data[offset:offset + 2], "little")
+    return offset != len(data)
 
 
 def _array(topic: dict, field: str, size: int) -> np.ndarray:

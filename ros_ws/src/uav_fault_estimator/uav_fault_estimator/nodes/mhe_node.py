@@ -34,6 +34,7 @@ from uav_fault_estimator.estimation.estimator_config import (
     noise_calibration,
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
+from uav_fault_estimator.estimation.noise_model import SUITES
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 from uav_fault_estimator.nodes.matched_streams import checked_stamp
 from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampVerdict
@@ -146,14 +147,20 @@ class MheNode(Node):
         self.count(result)
 
     def columns(self, message: Residuals) -> list[int] | None:
-        """Indices of the estimated faults among the message's S columns; None if absent."""
+        """Indices of the estimated faults among the message's S columns; None (the message
+        dropped, counted and said) when a column is absent, S's size does not match its
+        names or the wind source is not one of the message's constants."""
         offered = list(message.fault_names)
         missing = [name for name in self.estimated if name not in offered]
-        if missing or len(message.sensitivity) != Residuals.CHANNELS * len(offered):
+        reason = None
+        if missing:
+            reason = f"residuals lack the columns {missing}"
+        elif len(message.sensitivity) != Residuals.CHANNELS * len(offered):
+            reason = f"S has {len(message.sensitivity)} entries for {len(offered)} faults"
+        elif message.wind_source not in SUITES:
+            reason = f"unknown wind_source {message.wind_source}"
+        if reason is not None:
             self.counts["rejected_messages"] += 1
-            reason = (f"residuals lack the columns {missing}" if missing else
-                      f"S has {len(message.sensitivity)} entries for "
-                      f"{len(offered)} faults")
             self.get_logger().warning(f"residuals skipped: {reason}", throttle_duration_sec=5.0)
             self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.counts)
             return None
