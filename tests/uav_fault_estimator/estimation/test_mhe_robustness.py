@@ -108,6 +108,30 @@ def test_a_huge_finite_sensitivity_is_left_out_like_a_lost_row():
 
 
 @pytest.mark.timeout(60)
+def test_a_gap_is_as_if_its_residuals_had_been_lost():
+    """advance(20) between samples 60 and 61 (a gap of 20 periods in the residual stream)
+    against an estimator given those 20 samples with every channel lost: the same window
+    data and arrival cost, so the same estimates from the next update on, to the solver's
+    accuracy; and the estimate across the gap is kept, not reset to the prior."""
+    y, s, _ = sequence()
+    bridged, lost = estimator(), estimator()
+    gap = 20
+    for k in range(60):
+        bridged.update(y[k], s[k])
+        before = lost.update(y[k], s[k])
+    bridged.advance(gap)
+    for _ in range(gap):
+        lost.update(y[60], s[60], np.zeros(6, dtype=bool))
+    for k in range(60, SAMPLES):
+        result, expected = bridged.update(y[k], s[k]), lost.update(y[k], s[k])
+        assert result.status is SolveStatus.SOLVED
+        assert result.window_pct == pytest.approx(expected.window_pct, abs=0.05), k
+        if k == 60:
+            print(f"before the gap {before.fault_pct} %, after it {result.fault_pct} %")
+            assert result.fault_pct == pytest.approx(before.fault_pct, abs=0.5)
+
+
+@pytest.mark.timeout(60)
 def test_reset_starts_over_exactly_like_a_new_estimator():
     """After reset (a restarted source) the estimator gives, to the last digit, what a new
     one gives on the same data: nothing of the first flight is left in it."""

@@ -13,7 +13,11 @@ import numpy as np
 import pytest
 from uav_common.channels import STATE_CHANNELS
 from uav_fault_estimator.estimation.residuals import ResidualGenerator
-from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampMatcher, StampVerdict
+from uav_fault_estimator.nodes.stamp_matching import (
+    GuardedStream,
+    StampGuard,
+    StampMatcher,
+)
 from uav_sim.filters import LowPass
 
 FAULTS = ("right_wing_lift_loss", "left_wing_drag_increase")
@@ -114,7 +118,7 @@ def test_stamp_matcher_releases_complete_sets_in_stamp_order() -> None:
     assert matcher.add("state", 100, "s1") == []
     assert matcher.add("controls", 200, "c2") == [(200, {"state": "s2", "controls": "c2"})]
     assert matcher.dropped_sets == 1  # stamp 100 never got its controls
-    assert matcher.guard.newest_ns == 200  # the newest released stamp
+    assert matcher.released_ns == 200  # the newest released stamp
 
 
 @pytest.mark.timeout(30)
@@ -126,19 +130,22 @@ def test_an_optional_stream_is_waited_for_until_late_lost_or_waited_out() -> Non
     assert matcher.add("air", 100, "a1") == [(100, {"state": "s1", "air": "a1"})]
     assert matcher.add("state", 200, "s2") == []
     assert matcher.add("state", 300, "s3") == []
-    assert matcher.add("state", 400, "s4") == [(200, {"state": "s2"})]  # air of 200 late...
-    assert matcher.add("air", 200, "a2") == [] and matcher.late_optional == 1
-    assert matcher.add("air", 400, "a4") == [(300, {"state": "s3"}),  # ...300's lost: 400's came
-                                             (400, {"state": "s4", "air": "a4"})]
-    assert matcher.guard.newest_ns == 400
-    published["air"] = False  # its publisher gone: what it sent may still be queued
-    assert matcher.add("state", 500, "s5") == []
-    assert matcher.add("air", 500, "a5") == [(500, {"state": "s5", "air": "a5"})]
-    assert matcher.add("state", 600, "s6") == []
+    # air silent for the whole wait: 200 goes without it, and so do the sets after it
+    assert matcher.add("state", 400, "s4") == [(200, {"state": "s2"}), (300, {"state": "s3"}),
+                                               (400, {"state": "s4"})]
+    assert matcher.add("state", 500, "s5") == [(500, {"state": "s5"})]  # not waited for...
+    assert matcher.add("air", 200, "a2") == [] and matcher.late_optional == 1  # ...until heard
+    assert matcher.add("state", 600, "s6") == []                          # again, late or not
+    assert matcher.add("air", 600, "a6") == [(600, {"state": "s6", "air": "a6"})]
     assert matcher.add("state", 700, "s7") == []
-    assert matcher.add("state", 800, "s8") == [(600, {"state": "s6"}),  # waited out...
-                                               (700, {"state": "s7"}), (800, {"state": "s8"})]
-    assert matcher.add("state", 900, "s9") == [(900, {"state": "s9"})]  # ...then not waited for
+    assert matcher.released_ns == 600
+    published["air"] = False  # its publisher gone: what it sent may still be queued
+    assert matcher.add("air", 700, "a7") == [(700, {"state": "s7", "air": "a7"})]
+    assert matcher.add("state", 800, "s8") == []
+    assert matcher.add("state", 900, "s9") == []
+    assert matcher.add("state", 1000, "s10") == [(800, {"state": "s8"}),  # waited out...
+                                                 (900, {"state": "s9"}), (1000, {"state": "s10"})]
+    assert matcher.add("state", 1100, "s11") == [(1100, {"state": "s11"})]  # ...then not
     assert matcher.dropped_sets == 0
 
 
@@ -177,20 +184,30 @@ def test_a_non_finite_prediction_skips_the_sample_and_keeps_the_state() -> None:
 
 
 @pytest.mark.timeout(30)
-def test_a_stray_stamp_is_dropped_and_only_a_run_of_them_is_a_restart() -> None:
+def test_a_stray_stamp_is_dropped_a_gap_taken_and_only_a_run_back_is_a_restart() -> None:
     s = 1_000_000_000
     guard = StampGuard(confirm_stamps=3, max_ahead_s=10.0)
-    verdicts = []
-    for stamp in (1 * s, 2 * s, 2 * s, 1 * s, 3 * s,   # a duplicate, one back: strays
-                  50 * s, 4 * s,                         # one far ahead: a stray
-                  1 * s, 1 * s, 2 * s, 3 * s, 4 * s):    # three distinct in a row: a restart
-        verdict = guard.check(stamp)
-        verdicts.append(verdict.value)
-        if verdict is not StampVerdict.STRAY:
-            guard.accept(stamp)
-    assert verdicts == ["accept", "accept", "stray", "stray", "accept", "stray", "accept",
-                        "stray", "stray", "stray", "restart", "accept"]
-    assert guard.newest_ns == 4 * s
+    stamps = (1 * s, 2 * s, 2 * s, 1 * s, 3 * s,   # a duplicate, one back: strays
+              50 * s, 4 * s,                         # one far ahead, then on from 3: a stray
+              60 * s, 61 * s,                        # far ahead, and on from there: a gap
+              1 * s, 1 * s, 2 * s, 3 * s, 4 * s)     # three distinct back in a row: a restart
+    verdicts = [guard.check(stamp).value for stamp in stamps]
+    assert verdicts == ["accept", "accept", "stray", "stray", "accept", "hold", "accept",
+                        "hold", "gap", "stray", "stray", "stray", "restart", "accept"]
+    assert guard.newest_ns == 4 * s and guard.last_gap_ns == 56 * s
+
+
+@pytest.mark.timeout(30)
+def test_a_guarded_stream_gives_back_what_it_held_at_a_gap_and_counts_strays() -> None:
+    s = 1_000_000_000
+    stream = GuardedStream(StampGuard(max_ahead_s=10.0))
+    fed = [(1 * s, "a"), (50 * s, "stray"), (2 * s, "b"), (2 * s, "dup"),
+           (30 * s, "c"), (31 * s, "d")]
+    taken = [stream.feed(stamp, payload) for stamp, payload in fed]
+    assert [(verdict.value, [p for _, p in out]) for verdict, out in taken] == [
+        ("accept", ["a"]), ("hold", []), ("accept", ["b"]), ("stray", []), ("hold", []),
+        ("gap", ["c", "d"])]
+    assert stream.strays == 2
 
 
 @pytest.mark.timeout(30)

@@ -3,6 +3,7 @@ and in calm air a seeded 10 % lift loss recovered by the estimator's defaults.""
 
 from __future__ import annotations
 
+import signal
 import subprocess
 
 import numpy as np
@@ -140,3 +141,85 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
     values = [{item.key: item.value for item in status.values}
               for array in diagnostics for status in array.status if status.name == "/mhe_node"]
     assert values and values[-1]["rejected_messages"] == "1"
+
+
+@pytest.mark.timeout(120)
+def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
+    """A residual source silent for 20 s (residual_node killed and started again, the
+    flight going on): mhe_node bridges the gap instead of resetting, the estimate across it
+    stays the one before it (a 5 % lift loss: before, the estimates restarted from 0 for
+    10 s), and every residual sent gets its estimate."""
+    noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
+    rng = np.random.default_rng(4)
+    sensitivity = 2.0 * noise_sd[:, None] * rng.normal(size=(Residuals.CHANNELS, 4))
+    faults_pct = np.array([5.0, 0.0, 0.0, 0.0])
+    received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
+    estimates = received["/faults/estimate"]
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
+                                  DIAGNOSTICS_QOS)["/diagnostics"]
+    node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
+    publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
+    assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+    sent = [*range(1, 41), *range(81, 121)]  # 0.5-20 s, then 40.5-60 s
+    for count, k in enumerate(sent, start=1):
+        publisher.publish(residual_message(k, sensitivity, faults_pct, noise_sd, rng))
+        graph.spin(5.0, until=lambda count=count: len(estimates) >= count)
+    graph.spin(2.0)
+    assert node.running(), node.output()
+    stamps = {round(stamp_seconds(m.header.stamp) / PERIOD_S): m for m in estimates}
+    assert sorted(stamps) == sent
+    before, after = stamps[40].values_pct, stamps[81].values_pct
+    print(f"before the gap {np.round(before, 2)} %, after it {np.round(after, 2)} %")
+    assert after == pytest.approx(before, abs=0.5)
+    assert stamps[120].values_pct[0] == pytest.approx(5.0, abs=1.0)
+    values = [{item.key: item.value for item in status.values}
+              for array in diagnostics for status in array.status if status.name == "/mhe_node"]
+    assert values[-1]["stamp_resets"] == "0" and values[-1]["gaps"] == "1"
+    assert "resumed at 40.500 s after a gap of 20.50 s" in node.output()
+
+
+@pytest.mark.timeout(120)
+def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process, tmp_path):
+    """mhe_node with a state file killed (SIGKILL) after 20 s of a 5 % lift loss and
+    started again: its first estimate is the one it had (before: the prior, 0 %); a flight
+    that starts again (stamps from 0.5 s, fault-free) starts from the prior, and says so."""
+    noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
+    rng = np.random.default_rng(5)
+    sensitivity = 2.0 * noise_sd[:, None] * rng.normal(size=(Residuals.CHANNELS, 4))
+    faults_pct = np.array([5.0, 0.0, 0.0, 0.0])
+    received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
+    estimates = received["/faults/estimate"]
+    publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
+    argv = ros2_run_argv("uav_fault_estimator", "mhe_node",
+                         ros_args=["-p", f"state_file:={tmp_path / 'mhe.json'}"])
+
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
+                                  DIAGNOSTICS_QOS)["/diagnostics"]
+
+    def fly(name: str, steps: range, faults_pct: np.ndarray = faults_pct
+            ) -> tuple[list[FaultEstimate], str]:
+        """Start the node, wait for its first status (a killed one's subscription may still
+        count for a while), send the residuals, kill it; its estimates and its log."""
+        diagnostics.clear()
+        node = start_process(argv, name)
+        assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+        graph.spin(30.0, until=lambda: any(status.name == "/mhe_node" for array in diagnostics
+                                           for status in array.status))
+        graph.spin(0.5)
+        estimates.clear()
+        for count, k in enumerate(steps, start=1):
+            publisher.publish(residual_message(k, sensitivity, faults_pct, noise_sd, rng))
+            graph.spin(5.0, until=lambda count=count: len(estimates) >= count)
+        assert len(estimates) == len(steps), node.output()
+        node.stop(signal.SIGKILL)
+        return list(estimates), node.output()
+
+    first, _ = fly("mhe_node", range(1, 41))
+    resumed, log = fly("mhe_node_again", range(41, 61))
+    print(f"last before {np.round(first[-1].values_pct, 2)}, first after "
+          f"{np.round(resumed[0].values_pct, 2)} %")
+    assert "resumed from" in log  # the last estimate it had saved: of 19.5 or 20 s
+    assert resumed[0].values_pct == pytest.approx(first[-1].values_pct, abs=0.5)
+    again, log = fly("mhe_node_new_flight", range(1, 5), np.zeros(4))  # fault-free
+    assert "a new flight, starting from the prior" in log
+    assert max(again[0].values_pct) < 1.0

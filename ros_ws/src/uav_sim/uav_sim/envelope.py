@@ -49,6 +49,21 @@ AIR_DATA_BOUNDS: dict[str, tuple[float, float]] = {
     "sideslip": (-math.pi / 2, math.pi / 2),
 }
 WIND_BOUND_MPS = 50.0  # per NED axis: a hurricane
+# The fastest plausible change of the channels whose derivatives the residuals take, per
+# second: 10 g of acceleration, 100 rad/s² of angular acceleration. The shipped flights
+# (moderate turbulence, fault onsets and the sensor model included) reach 12 m/s² and
+# 22 rad/s² from one 20 Hz sample to the next. A sample further from the channel's last
+# accepted value than this allows since is a glitch, not a motion: one sample of +30 m/s in
+# velocity (inside STATE_BOUNDS) would otherwise reach the residuals as a 600 m/s² impulse
+# and pin every estimate.
+STATE_RATE_BOUNDS: dict[str, float] = {
+    "velocity_north": 100.0,                     # m/s²
+    "velocity_east": 100.0,
+    "velocity_down": 100.0,
+    "roll_rate": 100.0,                          # rad/s²
+    "pitch_rate": 100.0,
+    "yaw_rate": 100.0,
+}
 
 
 def _limits(bounds: dict[str, tuple[float, float]],
@@ -72,3 +87,39 @@ def gate(values: np.ndarray, limits: tuple[np.ndarray, np.ndarray]) -> tuple[np.
     if not outside.any():
         return values, 0
     return np.where(outside, np.nan, values), int(outside.sum())
+
+
+class RateGate:
+    """A stream's glitches: each bounded channel (channels' names, bounds per second as
+    STATE_RATE_BOUNDS) against its last accepted value. A value further from it than the
+    bound times the time since is replaced by NaN (missing, as gate() does) and counted;
+    the next samples are held against the same last good value, so a glitch of one sample
+    is one missing sample, and a real step (a sensor re-initialised) passes once the time
+    since allows it. NaN in, and the first sample, pass. reset() after a restart."""
+
+    def __init__(self, channels: tuple[str, ...], bounds: dict[str, float]) -> None:
+        self.index = np.array([channels.index(name) for name in bounds])
+        self.bound = np.array(list(bounds.values()))
+        self.reset()
+
+    def reset(self) -> None:
+        self.last = np.full(self.index.size, np.nan)
+        self.last_time_s = np.full(self.index.size, np.nan)
+
+    def __call__(self, time_s: float, values: np.ndarray) -> tuple[np.ndarray, int]:
+        """values (in the stream's channel order) at time_s [s], the glitches NaN; and how
+        many there were."""
+        picked = values[self.index]
+        jump = np.abs(picked - self.last) > self.bound * (time_s - self.last_time_s)  # NaN: no
+        accepted = np.isfinite(picked) & ~jump
+        self.last[accepted], self.last_time_s[accepted] = picked[accepted], time_s
+        if not jump.any():
+            return values, 0
+        values = np.array(values, dtype=float)
+        values[self.index[jump]] = np.nan
+        return values, int(jump.sum())
+
+
+def state_rate_gate() -> RateGate:
+    """A RateGate for an AircraftState stream: STATE_RATE_BOUNDS on STATE_CHANNELS."""
+    return RateGate(STATE_CHANNELS, STATE_RATE_BOUNDS)

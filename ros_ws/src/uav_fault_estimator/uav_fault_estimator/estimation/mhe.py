@@ -24,6 +24,11 @@ from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 from uav_fault_estimator.estimation.solvers import SolveOutcome, WindowSolver, first_solution
 
+# The most sample periods a gap advances the window by (advance): four windows of the
+# default horizon; after them the window is empty and the arrival cost has widened by as
+# many increments.
+GAP_SAMPLES_MAX = 200
+
 
 @dataclass
 class EstimateResult:
@@ -67,11 +72,14 @@ class MovingHorizonEstimator:
         self.column_names = tuple(fault.name for fault in config.faults)
         self.reset()
 
-    def reset(self) -> None:
-        """Back to the state before any data (after a restart of the residual source): empty
-        window, arrival cost and warm start at the prior, and a new ProxSuite instance, whose
-        preconditioner is made from the first window it solves. The QP's pattern is kept."""
+    def reset(self, prior_pct: np.ndarray | None = None) -> None:
+        """Back to the state before any data (after a restart of the flight): empty window,
+        arrival cost and warm start at the prior, and a new ProxSuite instance, whose
+        preconditioner is made from the first window it solves. The QP's pattern is kept.
+        prior_pct (p,) [%]: where to start instead of the configured prior (this estimator
+        restarted within a flight: its last estimate), with the same handover covariance."""
         config = self.config
+        prior = config.prior_pct if prior_pct is None else np.asarray(prior_pct, dtype=float)
         n, p = config.horizon, len(config.faults)
         self.solver = ProxQPSolver(self.problem, config.solver)
         self.active_set = (MonotoneActiveSet(self.problem)
@@ -81,7 +89,7 @@ class MovingHorizonEstimator:
             (self.solver,) if self.active_set is None else (self.active_set, self.solver))
         self.arrival = ArrivalCost(
             self._coefficients, self._increments[:, 0], self._increments[:, 1],
-            config.prior_pct, np.diag(config.r_diag_pct2), config.arrival_inflation,
+            prior, np.diag(config.r_diag_pct2), config.arrival_inflation,
             config.arrival_floor)
         # Each sample's data term (stage_normal_equations), made once when it arrives.
         self._gram = np.zeros((n, p, p))
@@ -91,10 +99,10 @@ class MovingHorizonEstimator:
         # the previous window's estimate of the new window's first point (UAV eq. 17).
         # The window starts empty: its first point is N - 1 samples before the first one.
         self._x = np.zeros(self.problem.n_variables)
-        self._x[self.problem.f_index] = config.prior_pct
+        self._x[self.problem.f_index] = prior
         self._y_dual = np.zeros(self.problem.b.size)
         self._z_dual = np.zeros(self.problem.l.size)
-        self._window_pct = np.tile(config.prior_pct, (n, 1))
+        self._window_pct = np.tile(prior, (n, 1))
 
     def retune(self, config: EstimatorConfig) -> None:
         """Take config's weights from the next update on, keeping the window and its estimate.
@@ -124,6 +132,21 @@ class MovingHorizonEstimator:
         self.arrival.floor_variance = config.arrival_floor
         self.solver.apply(config.solver)
         self.config = config
+
+    def advance(self, samples: int) -> None:
+        """Let `samples` sample periods pass without data (a gap in the residual stream, the
+        flight going on): each moves the window on by one empty stage, so the fault model's
+        increments span the gap and the arrival cost takes what leaves the window, widened
+        by one increment a step (EF eq. 3); no solve. The estimate and the monotonic faults'
+        floor are kept; beyond GAP_SAMPLES_MAX steps the gap changes nothing more here."""
+        for _ in range(min(samples, GAP_SAMPLES_MAX)):
+            self.arrival.absorb(self._gram[0], self._linear[0])
+            self.arrival.predict()
+            for window in (self._gram, self._linear, self._has_data):
+                window[:-1] = window[1:]
+            self._gram[-1], self._linear[-1], self._has_data[-1] = 0.0, 0.0, False
+            self._shift_guess()
+            self._window_pct = np.vstack([self._window_pct[1:], self._window_pct[-1:]])
 
     def update(
         self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None,

@@ -27,7 +27,7 @@ from uav_common.ros.node_tools import (
     run_node,
 )
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultAlarm
-from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS
+from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, state_rate_gate
 
 from uav_fault_estimator.detection.calibration import CHANNELS
 from uav_fault_estimator.detection.calibration_file import load_calibration
@@ -47,9 +47,9 @@ PARAMETERS = {
         1e-9, 0.5, live=True),
 }
 # `state` last: see MatchedStreams
-STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),
-           "state": (AircraftState, state_array, STATE_LIMITS)}
-OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS)}
+STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
+           "state": (AircraftState, state_array, STATE_LIMITS, state_rate_gate)}
+OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS, None)}
 _AIRSPEED = 0  # air_data_array's index of the true airspeed
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import sys
 from collections import deque
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -35,9 +36,14 @@ from uav_fault_estimator.estimation.estimator_config import (
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.estimation.noise_model import SUITES
+from uav_fault_estimator.estimation.saved_estimate import (
+    SavedEstimate,
+    load_estimate,
+    save_estimate,
+)
 from uav_fault_estimator.estimation.solve_status import SolveStatus
-from uav_fault_estimator.nodes.matched_streams import checked_stamp
-from uav_fault_estimator.nodes.stamp_matching import StampGuard, StampVerdict
+from uav_fault_estimator.nodes.matched_streams import guarded
+from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
 
 # Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
 # it; variances and scales positive where the estimator divides by them; the horizon at
@@ -85,6 +91,9 @@ PARAMETERS = {
                                     1e-12, 0.1, live=True),
     "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000,
                                      live=True),
+    "state_file": ParameterSpec(
+        "file for the last estimate: a restart within the flight (a first residual later "
+        "than the saved one) starts from it; empty: none"),
 }
 RECENT_SOLVES = 200  # solve times kept for the median and p99 on /diagnostics
 
@@ -108,9 +117,12 @@ class MheNode(Node):
         self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
-                       "stamp_resets": 0, "stray_stamps": 0,
+                       "stamp_resets": 0, "stray_stamps": 0, "gaps": 0,
                        **{f"solved_by_{method}": 0 for method in SOLVER_METHODS}}
-        self.stamps = StampGuard()
+        self.stamps = GuardedStream()
+        self.state_file = Path(self.parameters["state_file"]) if self.parameters[
+            "state_file"] else None
+        self.saved = self.saved_estimate()
 
     def retune(self, changes: dict[str, Any]) -> None:
         """Apply changed live parameters from the next residual on (ParameterError: none)."""
@@ -124,17 +136,68 @@ class MheNode(Node):
             f"{name} = {value}" for name, value in changes.items()))
 
     def on_residuals(self, message: Residuals) -> None:
-        stamp_ns = stamp_nanoseconds(message.header.stamp)
-        time_s = stamp_seconds(message.header.stamp)
-        verdict = checked_stamp(self, self.stamps, "residuals", stamp_ns, "estimator reset")
-        if verdict is StampVerdict.STRAY:
-            self.counts["stray_stamps"] += 1
-            return
+        """Guard the stamp (a stray dropped, a gap bridged, a restart of the flight reset),
+        then one estimator update per residual taken."""
+        verdict, taken = guarded(self, self.stamps, "residuals",
+                                 stamp_nanoseconds(message.header.stamp), message,
+                                 "estimator reset")
+        self.counts["stray_stamps"] = self.stamps.strays
         if verdict is StampVerdict.RESTART:
             self.estimator.reset()
             self.window_stamps_s.clear()
             self.counts["stamp_resets"] += 1
-        self.stamps.accept(stamp_ns)
+        if verdict is StampVerdict.GAP:
+            self.counts["gaps"] += 1
+            self.estimator.advance(self.gap_samples(self.stamps.guard.last_gap_ns / 1e9))
+        for stamp_ns, residuals in taken:
+            self.resume(stamp_ns)
+            self.estimate(residuals)
+
+    def saved_estimate(self) -> SavedEstimate | None:
+        """The state file's estimate, if there is one for these faults (else said, once)."""
+        if self.state_file is None:
+            return None
+        try:
+            saved = load_estimate(self.state_file)
+        except ValueError as error:
+            self.get_logger().warning(f"{error}: starting from the prior")
+            return None
+        if saved is not None and list(saved.names) != self.names:
+            self.get_logger().warning(f"state file {self.state_file} holds {list(saved.names)}, "
+                                      "not this node's faults: starting from the prior")
+            return None
+        return saved
+
+    def resume(self, stamp_ns: int) -> None:
+        """Before the first residual: start from the saved estimate if the flight has gone
+        on since it (the residual is later), else it is another flight's: the prior."""
+        saved, self.saved = self.saved, None
+        if saved is None:
+            return
+        if stamp_ns <= saved.stamp_ns:
+            self.get_logger().warning(
+                f"state file {self.state_file} is of {saved.stamp_ns / 1e9:.3f} s, the first "
+                f"residual of {stamp_ns / 1e9:.3f} s: a new flight, starting from the prior")
+            return
+        prior = self.config.prior_pct.copy()
+        prior[[self.estimated.index(name) for name in saved.names]] = saved.values_pct
+        self.estimator.reset(prior)
+        self.counts["resumed_from_s"] = round(saved.stamp_ns / 1e9, 3)
+        self.get_logger().info(
+            f"resumed from {self.state_file}: the estimate of {saved.stamp_ns / 1e9:.3f} s, "
+            + ", ".join(f"{n} {v:.2f} %" for n, v in zip(saved.names, saved.values_pct,
+                                                        strict=True)))
+
+    def gap_samples(self, gap_s: float) -> int:
+        """Residual periods missing in a gap of gap_s [s]: by the window's median period."""
+        if len(self.window_stamps_s) < 2:
+            return 0
+        period_s = float(np.median(np.diff(self.window_stamps_s)))
+        return max(round(gap_s / period_s) - 1, 0) if period_s > 0 else 0
+
+    def estimate(self, message: Residuals) -> None:
+        """One estimator update with the residual, its estimate published."""
+        time_s = stamp_seconds(message.header.stamp)
         columns = self.columns(message)
         if columns is None:
             return
@@ -143,8 +206,21 @@ class MheNode(Node):
             np.array(message.residual), sensitivity[:, columns], np.array(message.valid),
             self.noise.q_diag(message.wind_source, self.parameters["noise_variance_factor"]))
         self.window_stamps_s.append(time_s)
-        self.publisher.publish(self.estimate_message(time_s, result))
+        estimate = self.estimate_message(time_s, result)
+        self.publisher.publish(estimate)
         self.count(result)
+        if self.state_file is not None:
+            self.save(SavedEstimate(stamp_nanoseconds(message.header.stamp), tuple(self.names),
+                                    tuple(estimate.values_pct)))
+
+    def save(self, estimate: SavedEstimate) -> None:
+        """Keep the estimate in the state file; a file that cannot be written is said once
+        and not tried again."""
+        try:
+            save_estimate(self.state_file, estimate)
+        except OSError as error:
+            self.get_logger().error(f"state file {self.state_file}: {error}; not kept")
+            self.state_file = None
 
     def columns(self, message: Residuals) -> list[int] | None:
         """Indices of the estimated faults among the message's S columns; None (the message

@@ -25,7 +25,13 @@ from uav_common.ros.node_tools import (
 )
 from uav_common.sample_grid import GRID_TOLERANCE_S, next_grid_time
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
-from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, WIND_LIMITS
+from uav_sim.envelope import (
+    AIR_DATA_LIMITS,
+    CONTROL_LIMITS,
+    STATE_LIMITS,
+    WIND_LIMITS,
+    state_rate_gate,
+)
 
 from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_fault_estimator.estimation.residuals import (
@@ -51,10 +57,10 @@ PARAMETERS = {
         "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 10.0),
 }
 # `state` last: see MatchedStreams
-STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS),
-           "wind/filtered": (WindEstimate, wind_array, WIND_LIMITS),
-           "state": (AircraftState, state_array, STATE_LIMITS)}
-OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS)}
+STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
+           "wind/filtered": (WindEstimate, wind_array, WIND_LIMITS, None),
+           "state": (AircraftState, state_array, STATE_LIMITS, state_rate_gate)}
+OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS, None)}
 
 
 class ResidualNode(Node):

@@ -16,53 +16,96 @@ class StampVerdict(Enum):
 
     ACCEPT = "accept"    # in order
     STRAY = "stray"      # drop it, and nothing else
+    HOLD = "hold"        # far ahead: keep it until the next stamp tells a gap from a stray
+    GAP = "gap"          # the stream resumed after a silence: take the held ones, then this
     RESTART = "restart"  # the source restarted: reset, then take this message as the first
 
 
 @dataclass
 class StampGuard:
-    """Stamps of a stream should rise. A stamp not newer than the newest accepted one (a
-    duplicate, one going backwards) or more than max_ahead_s past it is a stray: dropped,
-    alone. Only when confirm_stamps such distinct stamps arrive with nothing accepted in
-    between is the source taken as restarted (or jumped): the caller resets.
+    """One stream's stamps, each against that stream's own newest: they should rise.
 
-    A restart thus loses its first confirm_stamps - 1 stamps (0.2 s at 20 Hz), and a single
-    bad stamp loses nothing but itself.
+    A stamp not newer than the newest (a duplicate, one going backwards) is a stray:
+    dropped, alone; only confirm_stamps distinct ones in a row, with nothing in order
+    between, are a restarted source (its clock went back: the caller resets). A stamp more
+    than max_ahead_s past the newest is held: if the next one follows it (newer, within
+    max_ahead_s), the stream resumed after a gap (a publisher that was silent, restarted or
+    replaced, the flight going on): both are taken, nothing reset; otherwise the held one
+    was a stray. Skew between streams does not matter: each is guarded on its own.
+
+    A restart thus loses its first confirm_stamps - 1 stamps (0.2 s at 20 Hz), a gap
+    nothing, and a single bad stamp nothing but itself.
     """
 
     confirm_stamps: int = 5
-    # Sensors every 0.05 s, residuals every 0.5 s: a jump of more than 2 s is no stream's
-    # next message. (Accepting one that is, say, 7 s ahead would make the real stream behind
-    # it look like strays until it counts as a restart: measured in scripts/soak.py.) A
-    # source silent for longer than this comes back as a restart.
+    # Sensors every 0.05 s, residuals every 0.5 s: a step of more than 2 s is no stream's
+    # next message, but a gap in it or a bad stamp.
     max_ahead_s: float = 2.0
     newest_ns: int | None = None
-    strays: set[int] = field(default_factory=set)
+    behind: set[int] = field(default_factory=set)  # distinct stray stamps since the newest
+    held_ns: int | None = None  # a stamp far ahead, until the next one
+    last_gap_ns: int = 0  # the silence before the last GAP: held stamp - newest before it
 
-    def in_order(self, stamp_ns: int) -> bool:
-        """Whether the stamp is newer than the newest accepted one, and not too far ahead."""
-        newest = self.newest_ns
-        return newest is None or (
-            newest < stamp_ns <= newest + self.max_ahead_s * NANOSECONDS_PER_SECOND)
+    def follows(self, stamp_ns: int, previous_ns: int | None) -> bool:
+        """Whether stamp_ns is newer than previous_ns and not too far ahead of it."""
+        return previous_ns is None or (
+            previous_ns < stamp_ns <= previous_ns + self.max_ahead_s * NANOSECONDS_PER_SECOND)
 
     def check(self, stamp_ns: int) -> StampVerdict:
-        """Classify a stamp against the newest accepted one (`accept` records that)."""
-        if self.in_order(stamp_ns):
-            self.strays.clear()
+        """Classify a stamp against the stream's newest one, and record it when taken."""
+        held, self.held_ns = self.held_ns, None
+        if held is not None and self.follows(stamp_ns, held):
+            self.last_gap_ns = held - (self.newest_ns if self.newest_ns is not None else held)
+            self._take(stamp_ns)
+            return StampVerdict.GAP
+        if self.follows(stamp_ns, self.newest_ns):
+            self._take(stamp_ns)
             return StampVerdict.ACCEPT
-        self.strays.add(stamp_ns)
-        if len(self.strays) < self.confirm_stamps:
+        if stamp_ns > self.newest_ns:
+            self.held_ns = stamp_ns
+            return StampVerdict.HOLD
+        self.behind.add(stamp_ns)
+        if len(self.behind) < self.confirm_stamps:
             return StampVerdict.STRAY
         self.reset()
+        self._take(stamp_ns)
         return StampVerdict.RESTART
 
-    def accept(self, stamp_ns: int) -> None:
-        """The stream's newest stamp is now stamp_ns."""
+    def _take(self, stamp_ns: int) -> None:
         self.newest_ns = stamp_ns
+        self.behind.clear()
 
     def reset(self) -> None:
-        self.newest_ns = None
-        self.strays.clear()
+        self.newest_ns = self.held_ns = None
+        self.behind.clear()
+
+
+@dataclass
+class GuardedStream:
+    """One stream's messages through its StampGuard: which to take, in order. A held
+    message (far ahead) is kept here until the next one tells whether it began a gap."""
+
+    guard: StampGuard = field(default_factory=StampGuard)
+    held: tuple[int, Any] | None = None
+    strays: int = 0  # messages dropped for their stamps
+
+    def feed(self, stamp_ns: int, payload: Any) -> tuple[StampVerdict, list[tuple[int, Any]]]:
+        """The verdict on this message and the (stamp, payload) pairs to take now, oldest
+        first: after a GAP the held one too; after a RESTART the caller resets first."""
+        verdict = self.guard.check(stamp_ns)
+        held, self.held = self.held, None
+        if verdict is StampVerdict.HOLD:
+            self.held = (stamp_ns, payload)
+        elif held is not None and verdict is not StampVerdict.GAP:
+            self.strays += 1  # it was a stray far ahead
+        if verdict in (StampVerdict.HOLD, StampVerdict.STRAY):
+            self.strays += verdict is StampVerdict.STRAY
+            return verdict, []
+        return verdict, [*([held] if verdict is StampVerdict.GAP else []), (stamp_ns, payload)]
+
+    def reset(self) -> None:
+        self.guard.reset()
+        self.held = None
 
 
 @dataclass
@@ -73,14 +116,14 @@ class StampMatcher:
     one has too, or is not waited for, or optional_wait newer stamps' required sets are
     complete (that optional message is late or lost: the set goes without it, and the
     message, should it come, is dropped and counted). An optional stream is waited for while
-    it has a publisher (awaited(stream)) and, once heard from, after its publisher has gone
-    too: what it sent may still be queued here (a simulator that finished while this node
-    was behind), until a set has gone without it for the full wait. A stream that has
-    delivered a newer stamp is not waited for (one publisher's messages come in order: the
-    one missing was lost, or dropped as a stray before a restart). Older sets whose
-    required part never completed are dropped when a newer one is released, and counted.
-    `guard` holds the newest released stamp: the caller asks it about each required message
-    first (a stray is dropped, a restart resets).
+    it may still send: it has a publisher (awaited(stream)), or it was heard from and what
+    it sent may still be queued here (a simulator that finished while this node was
+    behind). Once a set has gone without it after the full wait, it is not waited for
+    again until it is heard from again: a stream that stopped (a silent publisher, a lost
+    sensor) costs one wait, not one a set. A stream that has delivered a newer stamp is not
+    waited for (one publisher's messages come in order: the one missing was lost). Older
+    sets whose required part never completed are dropped when a newer one is released, and
+    counted. The caller guards each required stream's stamps (StampGuard) before adding.
     """
 
     streams: tuple[str, ...]
@@ -88,16 +131,16 @@ class StampMatcher:
     awaited: Callable[[str], bool] = lambda stream: True
     optional_wait: int = 20
     pending: dict[int, dict[str, Any]] = field(default_factory=dict)
-    guard: StampGuard = field(default_factory=StampGuard)
+    released_ns: int | None = None  # the newest released set's stamp
     dropped_sets: int = 0
     late_optional: int = 0
     # the newest stamp of each optional stream heard from since the reset
     newest_optional_ns: dict[str, int] = field(default_factory=dict)
-    abandoned: set[str] = field(default_factory=set)  # heard, gone, and waited out
+    abandoned: set[str] = field(default_factory=set)  # waited out, not heard from since
 
     def reset(self) -> None:
         self.pending.clear()
-        self.guard.reset()
+        self.released_ns = None
         self.newest_optional_ns.clear()
         self.abandoned.clear()
 
@@ -106,24 +149,22 @@ class StampMatcher:
 
     def _waits_for(self, stream: str, stamp_ns: int) -> bool:
         """Whether the set of stamp_ns, missing this optional stream's message, holds for it."""
-        if self.newest_optional_ns.get(stream, stamp_ns) > stamp_ns:
+        if self.newest_optional_ns.get(stream, stamp_ns) > stamp_ns or stream in self.abandoned:
             return False
-        if self.awaited(stream):
-            return True
-        return stream in self.newest_optional_ns and stream not in self.abandoned
+        return self.awaited(stream) or stream in self.newest_optional_ns
 
     def add(self, stream: str, stamp_ns: int, payload: Any) -> list[tuple[int, dict[str, Any]]]:
         """Store one message; return the sets it lets go, oldest first."""
         if stream not in self.streams + self.optional:
             raise KeyError(f"unknown stream '{stream}', expected one of "
                            f"{self.streams + self.optional}")
-        if stream in self.optional and not self.guard.in_order(stamp_ns):
-            self.late_optional += 1  # its set went without it (or a stray stamp)
-            return []
         if stream in self.optional:
+            self.abandoned.discard(stream)  # heard from again, if late: waited for again
+            if self.released_ns is not None and stamp_ns <= self.released_ns:
+                self.late_optional += 1  # its set went without it
+                return []
             newest = self.newest_optional_ns.get(stream, stamp_ns)
             self.newest_optional_ns[stream] = max(stamp_ns, newest)
-            self.abandoned.discard(stream)
         self.pending.setdefault(stamp_ns, {})[stream] = payload
         complete = sorted(stamp for stamp, entry in self.pending.items()
                           if self._complete(entry))
@@ -138,7 +179,7 @@ class StampMatcher:
                        if o not in entry and self._waits_for(o, stamp)]
             if missing and len(complete) - 1 - complete.index(stamp) < self.optional_wait:
                 break  # its optional message may still come
-            self.abandoned.update(o for o in missing if not self.awaited(o))
+            self.abandoned.update(missing)
             released.append((stamp, self.pending.pop(stamp)))
-            self.guard.accept(stamp)
+            self.released_ns = stamp
         return released
