@@ -92,13 +92,39 @@ def test_an_unknown_fault_name_ends_mhe_node_with_one_message():
     assert len(lines) == 1 and "right_wing_lift_loss" in lines[0]
 
 
-def residual_message(k: int, sensitivity: np.ndarray, faults_pct: np.ndarray,
-                     noise_sd: np.ndarray, rng: np.random.Generator) -> Residuals:
-    """The k-th residual (stamped k · PERIOD_S) of y = S f + noise, air data flown."""
-    residual = sensitivity @ faults_pct + noise_sd * rng.normal(size=Residuals.CHANNELS)
-    return Residuals(header=header(k * PERIOD_S, BODY_FRAME), residual=residual.tolist(),
-                     valid=[True] * Residuals.CHANNELS, wind_source=Residuals.WIND_AIR_DATA,
-                     fault_names=list(PAPER_FAULT_NAMES), sensitivity=sensitivity.ravel().tolist())
+class SyntheticResiduals:
+    """Residuals y = S f + noise of a 5 % right-wing lift loss (air data flown, S of about
+    two noise deviations per %, seeded), published straight to mhe_node by the test's
+    graph node, which also watches the estimates and /diagnostics."""
+
+    def __init__(self, graph, seed: int) -> None:
+        self.noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
+        self.rng = np.random.default_rng(seed)
+        self.sensitivity = 2.0 * self.noise_sd[:, None] * self.rng.normal(
+            size=(Residuals.CHANNELS, 4))
+        self.estimates = graph.subscribe({"/faults/estimate": FaultEstimate},
+                                         STREAM_QOS)["/faults/estimate"]
+        self.diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
+                                           DIAGNOSTICS_QOS)["/diagnostics"]
+        self.publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
+
+    def message(self, k: int, faults_pct: tuple[float, ...] = (5.0, 0.0, 0.0, 0.0)
+                ) -> Residuals:
+        """The k-th residual, stamped k · PERIOD_S."""
+        residual = (self.sensitivity @ np.array(faults_pct)
+                    + self.noise_sd * self.rng.normal(size=Residuals.CHANNELS))
+        return Residuals(header=header(k * PERIOD_S, BODY_FRAME), residual=residual.tolist(),
+                         valid=[True] * Residuals.CHANNELS,
+                         wind_source=Residuals.WIND_AIR_DATA,
+                         fault_names=list(PAPER_FAULT_NAMES),
+                         sensitivity=self.sensitivity.ravel().tolist())
+
+    def node_values(self) -> dict[str, str]:
+        """The values of mhe_node's last status on /diagnostics."""
+        values = [{item.key: item.value for item in status.values}
+                  for array in self.diagnostics for status in array.status
+                  if status.name == "/mhe_node"]
+        return values[-1] if values else {}
 
 
 @pytest.mark.timeout(120)
@@ -109,25 +135,18 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
     with S = 1e300 (seconds of solver time before). The first is dropped and counted on
     /diagnostics, the second is INVALID_DATA with the last good estimate; the node keeps
     running and ends at the lift loss."""
-    noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
-    rng = np.random.default_rng(3)
-    sensitivity = 2.0 * noise_sd[:, None] * rng.normal(size=(Residuals.CHANNELS, 4))
-    faults_pct = np.array([5.0, 0.0, 0.0, 0.0])
-    received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
-    estimates = received["/faults/estimate"]
-    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
-                                  DIAGNOSTICS_QOS)["/diagnostics"]
+    synthetic = SyntheticResiduals(graph, seed=3)
+    estimates = synthetic.estimates
     node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
     assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
     bad_source, huge_s, count = 20, 30, 60
     for k in range(1, count + 1):
-        message = residual_message(k, sensitivity, faults_pct, noise_sd, rng)
+        message = synthetic.message(k)
         if k == bad_source:
             message.wind_source = 7
         if k == huge_s:
             message.sensitivity[0] = 1e300
-        publisher.publish(message)
+        synthetic.publisher.publish(message)
         graph.spin(5.0, until=lambda k=k: len(estimates) >= k - (k >= bad_source))
     graph.spin(2.0)
     assert node.running(), node.output()
@@ -138,9 +157,7 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
     print(f"S = 1e300: {stamps[huge_s].solve_time_ms:.3f} ms; final "
           f"{np.round(estimates[-1].values_pct, 2)} %")
     assert estimates[-1].values_pct[0] == pytest.approx(5.0, abs=1.0)
-    values = [{item.key: item.value for item in status.values}
-              for array in diagnostics for status in array.status if status.name == "/mhe_node"]
-    assert values and values[-1]["rejected_messages"] == "1"
+    assert synthetic.node_values()["rejected_messages"] == "1"
 
 
 @pytest.mark.timeout(120)
@@ -149,20 +166,13 @@ def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
     flight going on): mhe_node bridges the gap instead of resetting, the estimate across it
     stays the one before it (a 5 % lift loss: before, the estimates restarted from 0 for
     10 s), and every residual sent gets its estimate."""
-    noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
-    rng = np.random.default_rng(4)
-    sensitivity = 2.0 * noise_sd[:, None] * rng.normal(size=(Residuals.CHANNELS, 4))
-    faults_pct = np.array([5.0, 0.0, 0.0, 0.0])
-    received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
-    estimates = received["/faults/estimate"]
-    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
-                                  DIAGNOSTICS_QOS)["/diagnostics"]
+    synthetic = SyntheticResiduals(graph, seed=4)
+    estimates = synthetic.estimates
     node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
     assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
     sent = [*range(1, 41), *range(81, 121)]  # 0.5-20 s, then 40.5-60 s
     for count, k in enumerate(sent, start=1):
-        publisher.publish(residual_message(k, sensitivity, faults_pct, noise_sd, rng))
+        synthetic.publisher.publish(synthetic.message(k))
         graph.spin(5.0, until=lambda count=count: len(estimates) >= count)
     graph.spin(2.0)
     assert node.running(), node.output()
@@ -172,9 +182,8 @@ def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
     print(f"before the gap {np.round(before, 2)} %, after it {np.round(after, 2)} %")
     assert after == pytest.approx(before, abs=0.5)
     assert stamps[120].values_pct[0] == pytest.approx(5.0, abs=1.0)
-    values = [{item.key: item.value for item in status.values}
-              for array in diagnostics for status in array.status if status.name == "/mhe_node"]
-    assert values[-1]["stamp_resets"] == "0" and values[-1]["gaps"] == "1"
+    values = synthetic.node_values()
+    assert values["stamp_resets"] == "0" and values["gaps"] == "1"
     assert "resumed at 40.500 s after a gap of 20.50 s" in node.output()
 
 
@@ -183,20 +192,13 @@ def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process
     """mhe_node with a state file killed (SIGKILL) after 20 s of a 5 % lift loss and
     started again: its first estimate is the one it had (before: the prior, 0 %); a flight
     that starts again (stamps from 0.5 s, fault-free) starts from the prior, and says so."""
-    noise_sd = np.sqrt(load_noise_calibration().variances["air_data"])
-    rng = np.random.default_rng(5)
-    sensitivity = 2.0 * noise_sd[:, None] * rng.normal(size=(Residuals.CHANNELS, 4))
-    faults_pct = np.array([5.0, 0.0, 0.0, 0.0])
-    received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
-    estimates = received["/faults/estimate"]
-    publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
+    synthetic = SyntheticResiduals(graph, seed=5)
+    estimates, diagnostics = synthetic.estimates, synthetic.diagnostics
     argv = ros2_run_argv("uav_fault_estimator", "mhe_node",
                          ros_args=["-p", f"state_file:={tmp_path / 'mhe.json'}"])
 
-    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
-                                  DIAGNOSTICS_QOS)["/diagnostics"]
 
-    def fly(name: str, steps: range, faults_pct: np.ndarray = faults_pct
+    def fly(name: str, steps: range, faults_pct: tuple[float, ...] = (5.0, 0.0, 0.0, 0.0)
             ) -> tuple[list[FaultEstimate], str]:
         """Start the node, wait for its first status (a killed one's subscription may still
         count for a while), send the residuals, kill it; its estimates and its log."""
@@ -208,7 +210,7 @@ def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process
         graph.spin(0.5)
         estimates.clear()
         for count, k in enumerate(steps, start=1):
-            publisher.publish(residual_message(k, sensitivity, faults_pct, noise_sd, rng))
+            synthetic.publisher.publish(synthetic.message(k, faults_pct))
             graph.spin(5.0, until=lambda count=count: len(estimates) >= count)
         assert len(estimates) == len(steps), node.output()
         node.stop(signal.SIGKILL)
@@ -220,6 +222,6 @@ def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process
           f"{np.round(resumed[0].values_pct, 2)} %")
     assert "resumed from" in log  # the last estimate it had saved: of 19.5 or 20 s
     assert resumed[0].values_pct == pytest.approx(first[-1].values_pct, abs=0.5)
-    again, log = fly("mhe_node_new_flight", range(1, 5), np.zeros(4))  # fault-free
+    again, log = fly("mhe_node_new_flight", range(1, 5), (0.0, 0.0, 0.0, 0.0))  # fault-free
     assert "a new flight, starting from the prior" in log
     assert max(again[0].values_pct) < 1.0
