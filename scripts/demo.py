@@ -16,7 +16,10 @@ Several scenarios fly several aircraft in the one domain: vehicle k flies the k-
 the namespace /uavk with nodes of its own, the first simulator publishes /clock and the
 others follow it (one clock for the domain, so the scenarios must last as long); one
 recorder records them all, and each vehicle is reported from it (report.py --ns /uavk) into
-DIR/uavk/ (default DIR: runs/<name 1>+<name 2>...), its logs in logs/uavk/.
+DIR/uavk/ (default DIR: runs/<name 1>+<name 2>...), its logs in logs/uavk/. A node of one
+vehicle ending during the run (not the recorder, nor the first simulator: it gives the
+clock) fails that vehicle alone: it is said, the others fly on, every vehicle is reported as
+far as it came, and the run ends with status 1 naming the failed vehicle.
 
 The demo writes only into an output folder of its own: one it creates (or finds empty) and
 marks with the file .uav-demo-run. A run into a marked folder replaces the bag/ and logs/ of
@@ -172,6 +175,9 @@ class Demo:
         self.bag = out / "bag"
         self.logs = out / "logs"
         self.nodes: dict[str, RosProcess] = {}  # by Vehicle.node_name, in start order
+        # A vehicle whose node ended during the run: namespace -> (node, exit status). The
+        # other vehicles fly on; the run then ends with status 1 naming it.
+        self.failed: dict[str, tuple[str, int]] = {}
         self.progress: Progress | None = None
         self.next_report_s = PROGRESS_EVERY_S
         # per vehicle, one estimate per residual: residual_node runs with its defaults here
@@ -206,12 +212,32 @@ class Demo:
             for name, process in self.nodes.items():
                 status = process.process.poll()
                 if status is not None and not (name in finished and status == 0):
-                    raise NodeEndedError(name, status)
+                    self.node_ended(name, status)
             if (progress.time_s, progress.received) != last_seen:
                 last_seen, last_change = (progress.time_s, progress.received), time.monotonic()
             elif time.monotonic() - last_change > timeout_s:
                 return False
         return True
+
+    def node_ended(self, name: str, status: int) -> None:
+        """A node ended during the run: with several vehicles, its vehicle is marked failed
+        (said once) and the others fly on, unless it is the recorder or the simulator that
+        gives the clock, or no vehicle is left; else NodeEndedError."""
+        vehicle = next((v for v in self.vehicles if v.namespace
+                        and name.startswith(v.namespace.strip("/") + "/")), None)
+        if vehicle is not None and vehicle.namespace in self.failed:
+            return
+        clock = self.vehicles[0].node_name("sim_node")
+        if vehicle is None or name == clock or len(self.failed) + 1 == len(self.vehicles):
+            raise NodeEndedError(name, status)
+        self.failed[vehicle.namespace] = (name, status)
+        print(f"demo: {name} exited with {exit_status_text(status)} during the run (log: "
+              f"{self.logs / (name + '.log')}); {vehicle.namespace} is reported as far as it "
+              "came, the other vehicles fly on", file=sys.stderr, flush=True)
+
+    def flying(self) -> list[Vehicle]:
+        """The vehicles not failed."""
+        return [v for v in self.vehicles if v.namespace not in self.failed]
 
     def report_progress(self, final: bool = False) -> None:
         progress = self.progress
@@ -260,8 +286,8 @@ class Demo:
                           finished=simulators):
             raise StalledError(f"simulated time stood still for {STALL_TIMEOUT_S:g} s")
         # the last estimates may still be on their way when the simulators end
-        if not self.watch(lambda: min(progress.estimates.values()) >= self.expected,
-                          ESTIMATES_TIMEOUT_S, finished=simulators):
+        if not self.watch(lambda: min(progress.estimates[v.namespace] for v in self.flying())
+                          >= self.expected, ESTIMATES_TIMEOUT_S, finished=simulators):
             print(f"demo: {progress.received} of {self.expected * len(self.vehicles)} "
                   f"estimates arrived within {ESTIMATES_TIMEOUT_S:g} s of the flight's end",
                   file=sys.stderr)
@@ -450,8 +476,10 @@ def main() -> int:
             metrics, figures = write_report(demo.bag, report_out, vehicle.scenario.name,
                                             vehicle.namespace)
         except (ValueError, OSError) as error:  # a RecordingError is a ValueError
-            print(f"demo: no report: {error}", file=sys.stderr)
-            return 1
+            print(f"demo: no report{' of ' + vehicle.namespace if vehicle.namespace else ''}: "
+                  f"{error}", file=sys.stderr)
+            missing = True
+            continue
         except KeyboardInterrupt:
             print("\ndemo: interrupted while writing the report", file=sys.stderr)
             return 130
@@ -467,8 +495,11 @@ def main() -> int:
                   f"of {vehicle.node_name('mhe_node')} arrived", file=sys.stderr)
     if len(vehicles) > 1:
         print(f"written to {out}: bag/ (every vehicle), logs/")
+    for namespace, (name, status) in demo.failed.items():
+        print(f"demo: {namespace} failed: {name} exited with {exit_status_text(status)} "
+              "during the run", file=sys.stderr)
     print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time")
-    return 1 if failed or missing else 0
+    return 1 if failed or missing or demo.failed else 0
 
 
 def _stop(demo: Demo) -> list[str]:

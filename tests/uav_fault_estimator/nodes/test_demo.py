@@ -369,3 +369,32 @@ def test_a_second_run_into_its_folder_replaces_the_first(
     states = read_topics(run_dir / "bag", project_typestore(), ("/state",))["/state"]
     assert len(states) == 12 * 20 + 1, len(states)  # the second flight's, at 20 Hz from 0 s
     assert {path.name for path in (run_dir / "bag").glob("*.mcap")} == first_mcap
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(180)
+def test_one_aircraft_failing_leaves_the_other_to_finish(
+        start_process, short_scenario, run_dir) -> None:
+    """/uav1's mhe_node killed (SIGKILL) 20 s into a two-aircraft flight: before, the whole
+    demo stopped (status 1) and /uav2 lost 49 of its 120 estimates; now /uav2 flies on,
+    gets every estimate and its report, /uav1 is reported as far as it came, and the demo
+    ends with status 1 naming /uav1."""
+    duration_s = 60.0
+    scenarios = [short_scenario(duration_s, faults=[fault]) for fault in TWO_FAULTS]
+    demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
+    assert wait_until(lambda: any(int(t) >= 20 for t in PROGRESS.findall(demo.output()))
+                      or not demo.running(), timeout_s=80), demo.output()
+    mhe = [info for info in nodes_logging_under(run_dir)
+           if "mhe_node" in info.cmdline and "uav1" in info.cmdline]
+    assert len(mhe) == 1, demo.output()
+    kill_all(mhe)
+    assert demo.wait(120) == 1, demo.output()
+    output = demo.output()
+    print(output)
+    assert "demo: uav1/mhe_node exited with status -9 (killed by SIGKILL) during the run" in output
+    assert "demo: /uav1 failed: uav1/mhe_node exited with status -9 (killed" in output
+    second = json.loads((run_dir / "uav2" / "metrics.json").read_text())
+    assert second["pipeline"]["messages_received"] == 120
+    first = json.loads((run_dir / "uav1" / "metrics.json").read_text())
+    assert 0 < first["pipeline"]["messages_received"] < 120
+    assert not nodes_logging_under(run_dir)
