@@ -110,17 +110,23 @@ def test_a_bad_scenario_ends_before_any_node_starts(tmp_path, run_dir) -> None:
         assert not nodes_logging_under(tmp_path)
 
 
+def kill_at_20_s(demo: RosProcess, run_dir: Path, *words: str) -> None:
+    """Once the demo has flown 20 s, SIGKILL the one node of it whose command line holds
+    every word."""
+    assert wait_until(lambda: any(int(t) >= 20 for t in PROGRESS.findall(demo.output()))
+                      or not demo.running(), timeout_s=80), demo.output()
+    found = [info for info in nodes_logging_under(run_dir)
+             if all(word in info.cmdline for word in words)]
+    assert len(found) == 1, demo.output()
+    kill_all(found)
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_a_node_dying_mid_run_ends_the_demo_with_its_name(
         start_process, short_scenario, run_dir) -> None:
     demo = start_demo(start_process, short_scenario(DURATION_S), run_dir)
-    assert wait_until(lambda: any(int(t) >= 20 for t in PROGRESS.findall(demo.output()))
-                      or not demo.running(), timeout_s=80), demo.output()
-    residual = [info for info in nodes_logging_under(run_dir)
-                if "residual_node" in info.cmdline]
-    assert len(residual) == 1, demo.output()
-    kill_all(residual)
+    kill_at_20_s(demo, run_dir, "residual_node")
 
     assert demo.wait(30) == 1, demo.output()
     output = demo.output()
@@ -382,12 +388,7 @@ def test_one_aircraft_failing_leaves_the_other_to_finish(
     duration_s = 60.0
     scenarios = [short_scenario(duration_s, faults=[fault]) for fault in TWO_FAULTS]
     demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
-    assert wait_until(lambda: any(int(t) >= 20 for t in PROGRESS.findall(demo.output()))
-                      or not demo.running(), timeout_s=80), demo.output()
-    mhe = [info for info in nodes_logging_under(run_dir)
-           if "mhe_node" in info.cmdline and "uav1" in info.cmdline]
-    assert len(mhe) == 1, demo.output()
-    kill_all(mhe)
+    kill_at_20_s(demo, run_dir, "mhe_node", "uav1")
     assert demo.wait(120) == 1, demo.output()
     output = demo.output()
     print(output)
