@@ -189,7 +189,7 @@ def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
 
 @pytest.mark.timeout(120)
 def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process, tmp_path):
-    """mhe_node with a state file killed (SIGKILL) after 20 s of a 5 % lift loss and
+    """mhe_node with a state file killed (SIGKILL) after 10 s of a 5 % lift loss and
     started again: its first estimate is the one it had (before: the prior, 0 %); a flight
     that starts again (stamps from 0.5 s, fault-free) starts from the prior, and says so."""
     synthetic = SyntheticResiduals(graph, seed=5)
@@ -216,11 +216,11 @@ def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process
         node.stop(signal.SIGKILL)
         return list(estimates), node.output()
 
-    first, _ = fly("mhe_node", range(1, 41))
-    resumed, log = fly("mhe_node_again", range(41, 61))
+    first, _ = fly("mhe_node", range(1, 21))
+    resumed, log = fly("mhe_node_again", range(21, 31))
     print(f"last before {np.round(first[-1].values_pct, 2)}, first after "
           f"{np.round(resumed[0].values_pct, 2)} %")
-    assert "resumed from" in log  # the last estimate it had saved: of 19.5 or 20 s
+    assert "resumed from" in log  # the last estimate it had saved: of 9.5 or 10 s
     assert resumed[0].values_pct == pytest.approx(first[-1].values_pct, abs=0.5)
     again, log = fly("mhe_node_new_flight", range(1, 5), (0.0, 0.0, 0.0, 0.0))  # fault-free
     assert "a new flight, starting from the prior" in log
