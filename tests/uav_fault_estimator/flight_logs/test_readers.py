@@ -214,7 +214,8 @@ def with_time(lines: list[str], row: int, time_text: str) -> list[str]:
 ])
 def test_a_csv_time_cell_out_of_place_is_one_line_naming_file_and_row(
         logs: Logs, tmp_path: Path, time_text: str, said: str) -> None:
-    """One log time of the rates file replaced (before, 1e300 was replayed to -7.52e9 s)."""
+    """One log time of the rates file replaced (taken unchecked, 1e300 would be replayed at
+    -7.52e9 s)."""
     folder, rates = edited_csv_folder(logs, tmp_path, lambda lines: with_time(
         lines, 40, time_text))
     with pytest.raises(ValueError) as raised:

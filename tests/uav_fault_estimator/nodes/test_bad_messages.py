@@ -204,8 +204,9 @@ def test_absurd_body_rates_leave_the_detector_as_it_was(graph, start_process):
 @pytest.mark.timeout(240)
 def test_a_stream_running_ahead_of_the_others_changes_nothing(graph, start_process):
     """state 2.25 s ahead of controls, wind and air data (each stream in order: skew, as
-    from a publisher whose messages queue elsewhere): before, every state message was a
-    stray and the node restarted 30 times; the residuals equal the undisturbed node's."""
+    from a publisher whose messages queue elsewhere; guarded against the newest released
+    set, every state message would be a stray and the node would restart 30 times): the
+    residuals equal the undisturbed node's."""
     duration_s, skew_s = 30.0, 2.25
     flight = simulated_flight(load_scenario(default_scenario_path()), duration_s)
     clean, dirty, diagnostics, replayer = start_pair(start_process, graph)
@@ -240,8 +241,8 @@ def test_a_stream_running_ahead_of_the_others_changes_nothing(graph, start_proce
 @pytest.mark.timeout(240)
 def test_a_silent_air_data_publisher_is_waited_for_once_then_flown_without(graph,
                                                                           start_process):
-    """The air-data publisher alive but silent from 10 to 30 s (a lost sensor): before, the
-    node took it for a restart every 4.25 s and lost residuals; now it waits once, flies the
+    """The air-data publisher alive but silent from 10 to 30 s (a lost sensor; waited for
+    on every sample, it would look like a restart every 4.25 s): the node waits once, flies the
     filtered wind until air data comes back, and loses nothing: every residual published,
     nothing reset, the residuals back to the undisturbed node's as F_a forgets."""
     duration_s = 65.0
@@ -279,10 +280,9 @@ def test_a_silent_air_data_publisher_is_waited_for_once_then_flown_without(graph
 @pytest.mark.timeout(300)
 def test_one_glitch_inside_the_envelope_moves_no_estimate(graph, start_process):
     """One sample of north velocity +30 m/s (inside the envelope, 600 m/s² from the samples
-    around it) in the default flight, through residual_node and mhe_node: before, every
-    estimate went to 98-100 % and the drags still read 16 % 10 s later; now the sample is
-    taken as missing (its rate), and every estimate stays within 0.5 % of the undisturbed
-    chain's, at once and after."""
+    around it) in the default flight, through residual_node and mhe_node (taken as it is,
+    it drives every estimate to 98-100 %): the sample is taken as missing (its rate), and
+    every estimate stays within 0.5 % of the undisturbed chain's, at once and after."""
     duration_s, glitch_s = 60.0, 40.0
     flight = simulated_flight(load_scenario(default_scenario_path()), duration_s)
     # the estimates watched and both estimators listening before anything is flown

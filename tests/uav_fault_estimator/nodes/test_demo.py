@@ -381,8 +381,7 @@ def test_a_second_run_into_its_folder_replaces_the_first(
 @pytest.mark.timeout(180)
 def test_one_aircraft_failing_leaves_the_other_to_finish(
         start_process, short_scenario, run_dir) -> None:
-    """/uav1's mhe_node killed (SIGKILL) 10 s into a two-aircraft flight: before, the whole
-    demo stopped (status 1) and /uav2 lost part of its estimates; now /uav2 flies on, gets
+    """/uav1's mhe_node killed (SIGKILL) 10 s into a two-aircraft flight: /uav2 flies on, gets
     every estimate and its report, /uav1 is reported as far as it came, and the demo ends
     with status 1 naming /uav1."""
     duration_s = 40.0

@@ -164,8 +164,8 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
 def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
     """A residual source silent for 20 s (residual_node killed and started again, the
     flight going on): mhe_node bridges the gap instead of resetting, the estimate across it
-    stays the one before it (a 5 % lift loss: before, the estimates restarted from 0 for
-    10 s), and every residual sent gets its estimate."""
+    stays the one before it (a 5 % lift loss; a reset would start it from 0 again), and
+    every residual sent gets its estimate."""
     synthetic = SyntheticResiduals(graph, seed=4)
     estimates = synthetic.estimates
     node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
@@ -190,7 +190,7 @@ def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
 @pytest.mark.timeout(120)
 def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process, tmp_path):
     """mhe_node with a state file killed (SIGKILL) after 10 s of a 5 % lift loss and
-    started again: its first estimate is the one it had (before: the prior, 0 %); a flight
+    started again: its first estimate is the one it had, not the prior (0 %); a flight
     that starts again (stamps from 0.5 s, fault-free) starts from the prior, and says so."""
     synthetic = SyntheticResiduals(graph, seed=5)
     estimates, diagnostics = synthetic.estimates, synthetic.diagnostics

@@ -25,7 +25,7 @@ from uav_sim.simulation import Simulation
 from uav_fault_estimator.detection.detector import DetectorFlight
 from uav_fault_estimator.estimation.estimator_config import (
     config_from_parameters,
-    noise_calibration,
+    suite_noise,
 )
 from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
 from uav_fault_estimator.estimation.prediction import residual_generator
@@ -58,7 +58,7 @@ def fly_and_estimate(
            **(mhe_overrides or {})}
     generator = residual_generator(residual)
     estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
-    noise = noise_calibration(mhe)
+    noise = suite_noise(mhe, residual["tau_a_s"])
     published = list(mhe["fault_names"])
     simulation = Simulation(scenario)
     period_s = float(residual["update_period_s"])
@@ -71,7 +71,7 @@ def fly_and_estimate(
         if result is not None and on_grid(sample.time_s, period_s):
             estimate = estimator.update(
                 result.residual, result.sensitivity, result.valid,
-                noise.q_diag(result.wind_source, mhe["noise_variance_factor"]))
+                noise.q_diag(sample.time_s, result.wind_source))
             stamps.append(sample.time_s)
             values.append(estimate.fault_pct[estimate.columns(published)])
             statuses.append(int(estimate.status))

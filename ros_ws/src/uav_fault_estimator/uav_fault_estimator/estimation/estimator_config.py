@@ -12,7 +12,11 @@ from uav_common.channels import FAULT_NAMES, PAPER_FAULT_NAMES
 
 from uav_fault_estimator.estimation.fault_models import FaultModel, make_model
 from uav_fault_estimator.estimation.monotone_active_set import is_monotone
-from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
+from uav_fault_estimator.estimation.noise_model import (
+    NoiseCalibration,
+    SuiteNoise,
+    load_noise_calibration,
+)
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
 
@@ -140,6 +144,12 @@ class EstimatorConfig:
     def prior_pct(self) -> np.ndarray:
         """The faults before any data [%]."""
         return np.array([fault.prior_pct for fault in self.faults])
+
+
+def suite_noise(parameters: Mapping[str, Any], tau_a_s: float) -> SuiteNoise:
+    """The per-sample Q of mhe_node's parameters for residuals filtered with tau_a_s [s]
+    (residual_node's F_a)."""
+    return SuiteNoise(noise_calibration(parameters), tau_a_s, parameters["noise_variance_factor"])
 
 
 def noise_calibration(parameters: Mapping[str, Any]) -> NoiseCalibration:

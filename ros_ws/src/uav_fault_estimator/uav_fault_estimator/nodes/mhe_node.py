@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from rclpy.node import Node
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
+from uav_common.package_data import default_parameters
 from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_tools import (
     ERROR,
@@ -32,7 +33,7 @@ from uav_fault_estimator.estimation.estimator_config import (
     SOLVER_METHOD_KEY,
     SOLVER_METHODS,
     config_from_parameters,
-    noise_calibration,
+    suite_noise,
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.estimation.noise_model import SUITES
@@ -107,7 +108,9 @@ class MheNode(Node):
             self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS, self.retune
         )
         self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
-        self.noise = noise_calibration(self.parameters)
+        # F_a of residual_node, as configured: the time its residuals remember a wind
+        self.noise = suite_noise(self.parameters, default_parameters(
+            "uav_fault_estimator", "residual_node.yaml")["tau_a_s"])
         self.names = list(self.parameters["fault_names"])  # published
         self.estimator = MovingHorizonEstimator(self.config)
         self.estimated = self.estimator.column_names  # faults, then any nuisance parameters
@@ -132,6 +135,7 @@ class MheNode(Node):
         except ValueError as error:
             raise ParameterError(str(error)) from None
         self.config = config
+        self.noise.variance_factor = {**self.parameters, **changes}["noise_variance_factor"]
         self.get_logger().info("retuned: " + ", ".join(
             f"{name} = {value}" for name, value in changes.items()))
 
@@ -144,6 +148,7 @@ class MheNode(Node):
         self.counts["stray_stamps"] = self.stamps.strays
         if verdict is StampVerdict.RESTART:
             self.estimator.reset()
+            self.noise.reset()
             self.window_stamps_s.clear()
             self.counts["stamp_resets"] += 1
         if verdict is StampVerdict.GAP:
@@ -204,7 +209,7 @@ class MheNode(Node):
         sensitivity = np.array(message.sensitivity).reshape(Residuals.CHANNELS, -1)
         result = self.estimator.update(
             np.array(message.residual), sensitivity[:, columns], np.array(message.valid),
-            self.noise.q_diag(message.wind_source, self.parameters["noise_variance_factor"]))
+            self.noise.q_diag(time_s, message.wind_source))
         self.window_stamps_s.append(time_s)
         estimate = self.estimate_message(time_s, result)
         self.publisher.publish(estimate)
