@@ -300,14 +300,17 @@ class Demo:
 
     def stop(self) -> list[str]:
         """Stop the demo's node and every node process still running (SIGINT to each group
-        at once, SIGKILL to what remains after 10 s); the nodes that ended badly then."""
+        at once, SIGKILL to what remains after 10 s); the nodes that ended badly then (not
+        those that ended by the SIGINT itself: a process stopped before its handler was
+        installed)."""
         if self.progress is not None:
             self.progress.close()
             self.progress = None
         running = {name: node for name, node in self.nodes.items() if node.running()}
         statuses = stop_all(list(running.values()))
         return [f"{name} exited with {exit_status_text(status)} when stopped"
-                for name, status in zip(running, statuses, strict=True) if status != 0]
+                for name, status in zip(running, statuses, strict=True)
+                if status not in (0, -signal.SIGINT)]
 
 
 def prepare_output(out: Path, *scenario_paths: Path) -> None:

@@ -7,13 +7,14 @@ import json
 import os
 import re
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
-from demo import OUTPUT_MARK, OutputFolderError, prepare_output
+from demo import OUTPUT_MARK, Demo, OutputFolderError, Vehicle, prepare_output
 from helpers.process_table import kill_all, nodes_logging_under
 from helpers.repo import SCRIPTS
 from uav_common.channels import PAPER_FAULT_NAMES
@@ -398,3 +399,16 @@ def test_one_aircraft_failing_leaves_the_other_to_finish(
     first = json.loads((run_dir / "uav1" / "metrics.json").read_text())
     assert 0 < first["pipeline"]["messages_received"] < 80
     assert not nodes_logging_under(run_dir)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(60)
+def test_a_process_ended_by_the_stops_sigint_is_no_failure(tmp_path) -> None:
+    """A node process without a SIGINT handler yet ends by the signal itself (status -2):
+    stopped as asked, not reported; one that ignores it and is killed is."""
+    demo = Demo([Vehicle("", load_scenario(scenarios_dir() / "default.yaml"), None)], tmp_path)
+    demo.nodes["stopped_by_sigint"] = RosProcess(["sleep", "60"], tmp_path / "sleep.log")
+    demo.nodes["killed"] = RosProcess(["sh", "-c", "trap '' INT; sleep 60"],
+                                      tmp_path / "trap.log")
+    time.sleep(0.5)  # the trap set
+    assert demo.stop() == ["killed exited with status -9 (killed by SIGKILL) when stopped"]
