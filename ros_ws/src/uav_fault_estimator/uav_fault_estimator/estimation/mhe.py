@@ -30,6 +30,15 @@ from uav_fault_estimator.estimation.solvers import SolveOutcome, WindowSolver, f
 GAP_SAMPLES_MAX = 200
 
 
+def missing_samples(gap_s: float, stamps_s: Sequence[float]) -> int:
+    """Sample periods missing in a gap of gap_s [s] of a stream stamped stamps_s [s] before
+    it (its median period; 0 while fewer than two stamps tell it)."""
+    if len(stamps_s) < 2:
+        return 0
+    period_s = float(np.median(np.diff(stamps_s)))
+    return max(round(gap_s / period_s) - 1, 0) if period_s > 0 else 0
+
+
 @dataclass
 class EstimateResult:
     """Output of one update.

@@ -8,8 +8,11 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -49,3 +52,16 @@ def load_estimate(path: Path) -> SavedEstimate | None:
             math.isfinite(v) for v in estimate.values_pct):
         raise ValueError(f"state file {path}: names and finite values, as many of each")
     return estimate
+
+
+def resumed_prior(saved: SavedEstimate, first_stamp_ns: int, prior_pct: np.ndarray,
+                  columns: Sequence[str]) -> np.ndarray | None:
+    """The prior (p,) [%] a restarted estimator starts from: prior_pct with the saved
+    faults' values in their columns (the estimator's column names), when its first residual
+    (first_stamp_ns) is later than the saved estimate (the flight went on); None when it is
+    not (another flight: start from prior_pct)."""
+    if first_stamp_ns <= saved.stamp_ns:
+        return None
+    prior = np.array(prior_pct, dtype=float)
+    prior[[list(columns).index(name) for name in saved.names]] = saved.values_pct
+    return prior

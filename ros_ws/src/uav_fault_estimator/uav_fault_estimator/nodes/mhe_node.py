@@ -35,11 +35,16 @@ from uav_fault_estimator.estimation.estimator_config import (
     config_from_parameters,
     suite_noise,
 )
-from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
+from uav_fault_estimator.estimation.mhe import (
+    EstimateResult,
+    MovingHorizonEstimator,
+    missing_samples,
+)
 from uav_fault_estimator.estimation.noise_model import SUITES
 from uav_fault_estimator.estimation.saved_estimate import (
     SavedEstimate,
     load_estimate,
+    resumed_prior,
     save_estimate,
 )
 from uav_fault_estimator.estimation.solve_status import SolveStatus
@@ -120,7 +125,7 @@ class MheNode(Node):
         self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
-                       "stamp_resets": 0, "stray_stamps": 0, "gaps": 0,
+                       "stamp_resets": 0, "gaps": 0,
                        **{f"solved_by_{method}": 0 for method in SOLVER_METHODS}}
         self.stamps = GuardedStream()
         self.state_file = Path(self.parameters["state_file"]) if self.parameters[
@@ -145,7 +150,6 @@ class MheNode(Node):
         verdict, taken = guarded(self, self.stamps, "residuals",
                                  stamp_nanoseconds(message.header.stamp), message,
                                  "estimator reset")
-        self.counts["stray_stamps"] = self.stamps.strays
         if verdict is StampVerdict.RESTART:
             self.estimator.reset()
             self.noise.reset()
@@ -153,7 +157,8 @@ class MheNode(Node):
             self.counts["stamp_resets"] += 1
         if verdict is StampVerdict.GAP:
             self.counts["gaps"] += 1
-            self.estimator.advance(self.gap_samples(self.stamps.guard.last_gap_ns / 1e9))
+            self.estimator.advance(missing_samples(self.stamps.guard.last_gap_ns / 1e9,
+                                                   self.window_stamps_s))
         for stamp_ns, residuals in taken:
             self.resume(stamp_ns)
             self.estimate(residuals)
@@ -179,26 +184,18 @@ class MheNode(Node):
         saved, self.saved = self.saved, None
         if saved is None:
             return
-        if stamp_ns <= saved.stamp_ns:
+        prior = resumed_prior(saved, stamp_ns, self.config.prior_pct, self.estimated)
+        if prior is None:
             self.get_logger().warning(
                 f"state file {self.state_file} is of {saved.stamp_ns / 1e9:.3f} s, the first "
                 f"residual of {stamp_ns / 1e9:.3f} s: a new flight, starting from the prior")
             return
-        prior = self.config.prior_pct.copy()
-        prior[[self.estimated.index(name) for name in saved.names]] = saved.values_pct
         self.estimator.reset(prior)
         self.counts["resumed_from_s"] = round(saved.stamp_ns / 1e9, 3)
         self.get_logger().info(
             f"resumed from {self.state_file}: the estimate of {saved.stamp_ns / 1e9:.3f} s, "
             + ", ".join(f"{n} {v:.2f} %" for n, v in zip(saved.names, saved.values_pct,
                                                         strict=True)))
-
-    def gap_samples(self, gap_s: float) -> int:
-        """Residual periods missing in a gap of gap_s [s]: by the window's median period."""
-        if len(self.window_stamps_s) < 2:
-            return 0
-        period_s = float(np.median(np.diff(self.window_stamps_s)))
-        return max(round(gap_s / period_s) - 1, 0) if period_s > 0 else 0
 
     def estimate(self, message: Residuals) -> None:
         """One estimator update with the residual, its estimate published."""
@@ -243,7 +240,7 @@ class MheNode(Node):
         if reason is not None:
             self.counts["rejected_messages"] += 1
             self.get_logger().warning(f"residuals skipped: {reason}", throttle_duration_sec=5.0)
-            self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.counts)
+            self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.health())
             return None
         return [offered.index(name) for name in self.estimated]
 
@@ -264,6 +261,10 @@ class MheNode(Node):
             update_cpu_time_ms=result.update_cpu_ms,
         )
 
+    def health(self) -> dict[str, Any]:
+        """The counters /diagnostics shows, the stamp guard's strays among them."""
+        return {**self.counts, "stray_stamps": self.stamps.strays}
+
     def count(self, result: EstimateResult) -> None:
         """Counters and solve times for /diagnostics."""
         self.counts["updates"] += 1
@@ -282,7 +283,7 @@ class MheNode(Node):
                     zip(self.estimated, result.fault_pct, strict=True) if name not in self.names}
         self.diagnostics.update(level, text, {
             SOLVER_METHOD_KEY: self.config.solver.method,
-            **self.counts,
+            **self.health(),
             **{f"{name}_mps": f"{value:.2f}" for name, value in nuisance.items()},
             "median_ms": f"{np.median(times):.3f}",
             "p99_ms": f"{np.percentile(times, 99):.3f}",
