@@ -1,8 +1,8 @@
-"""A 30 s loss of the air data in the default faulted flight: the models fly the 10 s
-filtered wind meanwhile (residuals.py, per sample), the estimator weights those samples with
-the filtered-wind suite's calibrated noise, and the estimates of the faults found stay
-within the default targets. Through the core chain (offline.py); that residual_node shows
-the fallback on /diagnostics is tests/nodes/test_residual_node.py's."""
+"""A 30 s loss of the air data: the models fly the 10 s filtered wind meanwhile
+(residuals.py, per sample), and the estimator holds its estimate through the loss and
+while F_a forgets it (noise_model.SuiteNoise). Through the core chain (offline.py); that
+residual_node shows the fallback on /diagnostics is tests/nodes/test_residual_node.py's,
+that mhe_node holds is tests/nodes/test_mhe_node.py's."""
 
 from __future__ import annotations
 
@@ -43,37 +43,58 @@ def test_the_estimates_stay_within_the_targets_through_a_30_s_air_data_loss():
 
 
 @pytest.mark.timeout(30)
-def test_after_the_filtered_wind_q_returns_to_the_air_datas_as_f_a_forgets():
+def test_the_estimate_is_held_from_the_loss_until_f_a_has_forgotten_it():
     calibration = load_noise_calibration()
     noise = SuiteNoise(calibration, tau_a_s=4.0, variance_factor=2.0)
     air, filtered = (calibration.q_diag(source, 2.0) for source in (WIND_AIR_DATA,
                                                                      WIND_FILTERED))
-    assert np.array_equal(noise.q_diag(10.0, WIND_AIR_DATA), air)  # none flown before
-    assert np.array_equal(noise.q_diag(20.0, WIND_FILTERED), filtered)
-    for after_s in (0.5, 4.0, 20.0):
-        blended = noise.q_diag(20.0 + after_s, WIND_AIR_DATA)
-        np.testing.assert_allclose(blended, air + (filtered - air) * np.exp(-after_s / 2.0))
+    # no air data yet (an aircraft without it, or before its first sample): filtered Q
+    assert np.array_equal(noise.weigh(5.0, WIND_FILTERED), filtered)
+    assert np.array_equal(noise.weigh(10.0, WIND_AIR_DATA), air)
+    assert noise.weigh(20.0, WIND_FILTERED) is None            # lost after being flown
+    assert noise.hold_after_s == 12.0                          # 3 tau_a
+    assert noise.weigh(31.5, WIND_AIR_DATA) is None            # back, F_a still settling
+    assert np.array_equal(noise.weigh(32.0, WIND_AIR_DATA), air)
     noise.reset()
-    assert np.array_equal(noise.q_diag(30.0, WIND_AIR_DATA), air)
+    assert np.array_equal(noise.weigh(33.0, WIND_FILTERED), filtered)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(300)
+def test_a_fault_starting_during_the_loss_is_found_when_the_hold_ends():
+    """Air data lost 90-120 s, over the left drag step of 25 % at 110 s: no false alarm
+    (weighting the filtered-wind samples gave two), and the step found when the hold ends
+    (120 + 12 s), 21.5 s after it came instead of 1.5 s: the price of not estimating from
+    the filtered wind."""
+    scenario = load_scenario(default_scenario_path())
+    lost = tuple(SensorDropout(channel, 90.0, 120.0) for channel in AIR_DATA_CHANNELS)
+    faults, false_alarms = fault_metrics(
+        *fly_and_estimate(dataclasses.replace(scenario, sensor_dropouts=lost)),
+        SETTLE_S, THRESHOLD_PCT)
+    for name, fault in faults.items():
+        print(f"{name}: {fault}")
+    assert false_alarms == []
+    hold_ends_s = 120.0 + SuiteNoise.HOLD_AFTER_TAU_A * 4.0  # residual_node's tau_a_s
+    delay_s = faults["left_wing_drag_increase"]["detection_delay_s"]
+    assert hold_ends_s - 0.5 <= 110.0 + delay_s <= hold_ends_s + 3.0
+    for fault in faults.values():
+        assert abs(fault["estimate_final_pct"] - fault["seeded_final_pct"]) < 1.0
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(300)
 def test_a_30_s_air_data_loss_in_fault_free_flights_not_tuned_on():
     """Fault-free flights of seeds the estimator was not tuned on, air data lost from 100
-    to 130 s. With the samples after the loss weighted as clean air data, the largest
-    estimates would be 10.2 (seed 11), 4.8 (12) and 10.0 % (13); following F_a's memory,
-    they are 2.16, 1.52 and 3.10 %.
-    The 2 % threshold is met by seed 12 only. Measured and not adopted: the filtered-wind
-    samples' Q times 10, or those samples left out (the estimate held through the loss),
-    give 1.5 / 1.4 % on seed 11 but 3.2 / 3.6 % on seed 13; their Q weighted by the
-    one-step correlation (AR(1) white equivalent) gave nothing without the change above."""
+    to 130 s. Weighting the filtered-wind samples (their Q, times 10, or blended back
+    to the air data's along F_a's memory after the loss) left estimates of 2.2-3.6 %
+    (seeds 11 and 13); holding the estimate keeps every one under the 2 % threshold after
+    the loss begins. (Before it, seed 15 reads 2.4 % at 20 s with or without a loss.)"""
     scenario = load_scenario(scenarios_dir() / "fault_free.yaml")
     lost = tuple(SensorDropout(channel, 100.0, 130.0) for channel in AIR_DATA_CHANNELS)
     largest = {}
-    for seed in (11, 12, 13):
+    for seed in range(11, 17):
         estimates, _ = fly_and_estimate(dataclasses.replace(scenario, seed=seed,
                                                             sensor_dropouts=lost))
-        largest[seed] = float(estimates.values_pct[estimates.stamps_s >= SETTLE_S].max())
-    print("largest fault-free estimate per seed [%]:", largest)
-    assert largest[12] < THRESHOLD_PCT and max(largest.values()) < 3.5
+        largest[seed] = float(estimates.values_pct[estimates.stamps_s >= 100.0].max())
+    print("largest fault-free estimate from the loss on, per seed [%]:", largest)
+    assert max(largest.values()) < THRESHOLD_PCT

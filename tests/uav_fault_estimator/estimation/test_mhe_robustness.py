@@ -132,6 +132,25 @@ def test_a_gap_is_as_if_its_residuals_had_been_lost():
 
 
 @pytest.mark.timeout(60)
+def test_a_held_sample_lets_the_window_pass_as_a_gap_does():
+    """hold() (a sample not used: air data lost) is HELD with the estimate before it, and
+    the estimates after 20 holds are those after advance(20), bit for bit."""
+    y, s, _ = sequence()
+    held, bridged = estimator(), estimator()
+    for k in range(60):
+        before = held.update(y[k], s[k])
+        bridged.update(y[k], s[k])
+    for _ in range(20):
+        result = held.hold()
+        assert result.status is SolveStatus.HELD
+        assert np.array_equal(result.fault_pct, before.fault_pct)
+    bridged.advance(20)
+    for k in range(60, SAMPLES):
+        assert np.array_equal(held.update(y[k], s[k]).window_pct,
+                              bridged.update(y[k], s[k]).window_pct)
+
+
+@pytest.mark.timeout(60)
 def test_reset_starts_over_exactly_like_a_new_estimator():
     """After reset (a restarted source) the estimator gives, to the last digit, what a new
     one gives on the same data: nothing of the first flight is left in it."""

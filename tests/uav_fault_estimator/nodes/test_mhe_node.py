@@ -161,6 +161,35 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
 
 
 @pytest.mark.timeout(120)
+def test_an_air_data_loss_holds_the_estimate_until_f_a_has_settled(graph, start_process):
+    """Residuals that flew the filtered wind after the air data (a loss of 5 s) and the
+    air-data ones for 12 s (3 tau_a) after it: HELD, with the estimate before the loss,
+    counted on /diagnostics; then estimated again."""
+    synthetic = SyntheticResiduals(graph, seed=5)
+    estimates = synthetic.estimates
+    node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
+    assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+    lost, count = range(41, 51), 90
+    for k in range(1, count + 1):
+        message = synthetic.message(k)
+        if k in lost:
+            message.wind_source = Residuals.WIND_FILTERED
+        synthetic.publisher.publish(message)
+        graph.spin(5.0, until=lambda k=k: len(estimates) >= k)
+    graph.spin(2.0)
+    assert node.running(), node.output()
+    statuses = [m.solver_status for m in estimates]
+    held = [k for k, status in enumerate(statuses, start=1)
+            if status == FaultEstimate.STATUS_HELD]
+    assert held == [k for k in range(lost.start, count + 1)  # held less than 12 s after
+                    if (k - lost[-1]) * PERIOD_S < 12.0]
+    assert all(estimates[k - 1].values_pct == estimates[39].values_pct for k in held)
+    assert statuses[-1] == FaultEstimate.STATUS_SOLVED
+    assert estimates[-1].values_pct[0] == pytest.approx(5.0, abs=1.0)
+    assert synthetic.node_values()["held"] == str(len(held))
+
+
+@pytest.mark.timeout(120)
 def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
     """A residual source silent for 20 s (residual_node killed and started again, the
     flight going on): mhe_node bridges the gap instead of resetting, the estimate across it

@@ -69,9 +69,9 @@ def fly_and_estimate(
         result = generator.update(sample.time_s, sample.state, sample.controls, wind,
                                   None if true_wind else sample.air_data)
         if result is not None and on_grid(sample.time_s, period_s):
-            estimate = estimator.update(
-                result.residual, result.sensitivity, result.valid,
-                noise.q_diag(sample.time_s, result.wind_source))
+            q_diag = noise.weigh(sample.time_s, result.wind_source)
+            estimate = (estimator.hold() if q_diag is None else estimator.update(
+                result.residual, result.sensitivity, result.valid, q_diag))
             stamps.append(sample.time_s)
             values.append(estimate.fault_pct[estimate.columns(published)])
             statuses.append(int(estimate.status))

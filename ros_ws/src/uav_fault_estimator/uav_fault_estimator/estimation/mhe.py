@@ -157,6 +157,13 @@ class MovingHorizonEstimator:
             self._shift_guess()
             self._window_pct = np.vstack([self._window_pct[1:], self._window_pct[-1:]])
 
+    def hold(self) -> EstimateResult:
+        """One sample period passes with its sample not used (advance(1)): HELD, the
+        estimate kept."""
+        start = (time.perf_counter(), time.thread_time())
+        self.advance(1)
+        return self._result(SolveStatus.HELD, None, start)
+
     def update(
         self, y: np.ndarray, s: np.ndarray, valid: np.ndarray | None = None,
         noise_variances: np.ndarray | None = None,

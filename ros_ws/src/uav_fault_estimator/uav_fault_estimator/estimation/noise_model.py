@@ -50,36 +50,46 @@ class NoiseCalibration:
 
 
 class SuiteNoise:
-    """Q per residual sample from its suite and the ones before it.
+    """Q per residual sample from its suite, or a hold.
 
-    After the models flew the filtered wind (air data lost), the residuals F_a filters keep
-    that wind's error for a while: it fades as exp(-t / tau_a), its variance as
-    exp(-2 t / tau_a), t since the last filtered-wind sample. So Q goes from the
-    filtered-wind suite's back to the air data's along that curve, instead of taking the
-    first air-data sample as clean (which gave fault-free estimates of up to 10 % after a
-    30 s loss). Inputs: the calibration, tau_a_s (residual_node's F_a [s]) and the variance
-    factor (Q = factor times the variances).
+    An aircraft without air data flies the filtered wind throughout: its samples get the
+    filtered-wind suite's Q. Where the air data has been flown and is lost, the filtered
+    wind's gust error is no white noise: its one-step correlation is about 0.99, so over a
+    30 s loss it reads as a slowly changing fault whatever its Q (measured: 10 times Q, or
+    the AR(1) white equivalent, still gave fault-free estimates of 3 %). Such samples are
+    not used: the estimator holds its estimate (MovingHorizonEstimator.hold) through the
+    loss and for HOLD_AFTER_TAU_A F_a time constants after it, while F_a still carries
+    that wind's error (it fades as exp(-t / tau_a)). Inputs: the calibration, tau_a_s
+    (residual_node's F_a [s]) and the variance factor (Q = factor times the variances).
     """
+
+    # exp(-3) = 5 %: what F_a keeps of the filtered wind's error when the hold ends
+    HOLD_AFTER_TAU_A = 3.0
 
     def __init__(self, calibration: NoiseCalibration, tau_a_s: float,
                  variance_factor: float) -> None:
-        self.calibration, self.tau_a_s = calibration, tau_a_s
-        self.variance_factor = variance_factor
+        self.calibration, self.variance_factor = calibration, variance_factor
+        self.hold_after_s = self.HOLD_AFTER_TAU_A * tau_a_s
         self.reset()
 
     def reset(self) -> None:
-        """A new flight: no filtered-wind sample before."""
+        """A new flight: no sample before."""
         self.last_filtered_s = -math.inf
+        self.air_data_flown = False
 
-    def q_diag(self, time_s: float, wind_source: int) -> np.ndarray:
-        """Q (6,) of the residual sample at time_s [s] whose newest model flew wind_source."""
-        own = self.calibration.q_diag(wind_source, self.variance_factor)
+    def weigh(self, time_s: float, wind_source: int) -> np.ndarray | None:
+        """Q (6,) of the residual sample at time_s [s] whose newest model flew wind_source;
+        None when the estimator is to hold instead: the air data lost, or back for less
+        than hold_after_s [s]."""
         if wind_source == WIND_FILTERED:
             self.last_filtered_s = time_s
-            return own
-        filtered = self.calibration.q_diag(WIND_FILTERED, self.variance_factor)
-        remaining = math.exp(-2.0 * max(time_s - self.last_filtered_s, 0.0) / self.tau_a_s)
-        return own + (filtered - own) * remaining
+            if self.air_data_flown:
+                return None
+        elif time_s - self.last_filtered_s < self.hold_after_s and self.air_data_flown:
+            return None
+        else:
+            self.air_data_flown = True
+        return self.calibration.q_diag(wind_source, self.variance_factor)
 
 
 def fit_noise(residuals: dict[str, list[np.ndarray]]) -> NoiseCalibration:

@@ -14,3 +14,4 @@ class SolveStatus(IntEnum):
     INFEASIBLE = 2
     INVALID_DATA = 3
     WAITING = 4  # no usable data in the window yet: values are the prior, not a failure
+    HELD = 5  # the sample not used (air data lost, noise_model.SuiteNoise): estimate kept

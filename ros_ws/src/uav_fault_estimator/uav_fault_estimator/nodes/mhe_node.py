@@ -125,7 +125,7 @@ class MheNode(Node):
         self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
-                       "stamp_resets": 0, "gaps": 0,
+                       "stamp_resets": 0, "gaps": 0, "held": 0,
                        **{f"solved_by_{method}": 0 for method in SOLVER_METHODS}}
         self.stamps = GuardedStream()
         self.state_file = Path(self.parameters["state_file"]) if self.parameters[
@@ -204,9 +204,9 @@ class MheNode(Node):
         if columns is None:
             return
         sensitivity = np.array(message.sensitivity).reshape(Residuals.CHANNELS, -1)
-        result = self.estimator.update(
-            np.array(message.residual), sensitivity[:, columns], np.array(message.valid),
-            self.noise.q_diag(time_s, message.wind_source))
+        q_diag = self.noise.weigh(time_s, message.wind_source)
+        result = self.estimator.hold() if q_diag is None else self.estimator.update(
+            np.array(message.residual), sensitivity[:, columns], np.array(message.valid), q_diag)
         self.window_stamps_s.append(time_s)
         estimate = self.estimate_message(time_s, result)
         self.publisher.publish(estimate)
@@ -270,6 +270,9 @@ class MheNode(Node):
         self.counts["updates"] += 1
         if result.status is SolveStatus.WAITING:
             level, text = OK, "waiting for valid residuals"
+        elif result.status is SolveStatus.HELD:
+            self.counts["held"] += 1
+            level, text = WARN, "air data lost or settling: estimate held"
         elif result.status is SolveStatus.SOLVED:
             self.counts["solves"] += 1
             self.counts[f"solved_by_{result.solved_by}"] += 1

@@ -106,9 +106,9 @@ def fault_metrics(estimates: EstimateSeries, seeded: SeededSeries, settle_s: flo
 def solver_metrics(estimates: EstimateSeries) -> dict:
     """The solver method's name, solves (updates with a solution), their median, p99 and
     largest wall time, the median and p99 of their CPU time (None when not recorded),
-    failures (updates that did not solve, other than waiting for data)."""
+    failures (updates that did not solve, other than waiting for data or holding)."""
     solved = estimates.statuses == SolveStatus.SOLVED
-    failed = ~solved & (estimates.statuses != SolveStatus.WAITING)
+    failed = ~solved & ~np.isin(estimates.statuses, (SolveStatus.WAITING, SolveStatus.HELD))
     summary = {"name": estimates.solver_method or SolverSettings().method,
                "solves": int(solved.sum()), "failures": int(failed.sum())}
     cpu = None if estimates.cpu_times_ms is None else estimates.cpu_times_ms[solved]
