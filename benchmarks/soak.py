@@ -8,8 +8,10 @@ replayed (tests/helpers/flight_replay.py) into two copies of residual_node, mhe_
 detector_node, one in /clean and one in /dirty, on a ROS domain of its own. The /dirty copy
 gets, every 20-60 s of sim time at random (seeded), one of: a velocity of 1e200 for 2 s or
 of 1e6 m/s for 0.5 s, body rates of 1e6 rad/s for 0.5 s, a NaN or an Inf for 1 s, a
-duplicate, backwards or 1e6 s stamp, a lost controls message, or a residual of 1e300 given
-to its mhe_node between two real ones. Printed: the estimates each copy published against
+duplicate, backwards or 1e6 s stamp, a lost controls message, one north velocity 30 m/s
+off (inside the envelope), the air data lost for 30 s, or a residual given to its
+mhe_node between two real ones: of 1e300, with S of 1e300, or with an unknown
+wind_source. Printed: the estimates each copy published against
 the expected count (messages lost), the largest difference of the /dirty estimates from the
 /clean ones outside the disturbed windows (each event's span + residual_node's recovery_s +
 the estimator's window), inside them, and each /dirty node's memory at start and end.
@@ -46,10 +48,12 @@ NODES = (("uav_fault_estimator", "residual_node"), ("uav_fault_estimator", "mhe_
          ("uav_fault_estimator", "detector_node"))
 EVENT_GAP_S = (20.0, 60.0)
 RESIDUAL_PERIOD_S = residual_update_period_s()
+INJECTED = ("residual_1e300", "sensitivity_1e300", "wind_source_7")  # residuals to mhe_node
 KINDS = ("velocity_1e200", "velocity_1e6", "rates_1e6", "nan", "inf", "duplicate",
-         "backwards", "far_ahead", "lost_controls", "residual_1e300")
+         "backwards", "far_ahead", "lost_controls", "glitch_30mps", "air_data_lost",
+         *INJECTED)
 SPANS_S = {"velocity_1e200": 2.0, "velocity_1e6": 0.5, "rates_1e6": 0.5, "nan": 1.0,
-           "inf": 1.0}  # the others touch one sample
+           "inf": 1.0, "air_data_lost": 30.0}  # the others touch one sample
 VELOCITY_NORTH = STATE_CHANNELS.index("velocity_north")
 RATES = [STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate")]
 AILERON = CONTROL_CHANNELS.index("aileron")
@@ -69,7 +73,7 @@ def schedule(duration_s: float, seed: int) -> list[Event]:
     while time_s < duration_s - 10.0:
         kind = str(rng.choice(KINDS))
         start = round(time_s / 0.05) * 0.05  # on a sensor sample
-        if kind == "residual_1e300":  # 0.4 of a residual period past a residual stamp
+        if kind in INJECTED:  # 0.4 of a residual period past a residual stamp
             start = round((math.floor(time_s / RESIDUAL_PERIOD_S) + 0.8) * RESIDUAL_PERIOD_S, 6)
         events.append(Event(kind, start, SPANS_S.get(kind, 0.05)))
         time_s += rng.uniform(*EVENT_GAP_S)
@@ -108,17 +112,22 @@ class Corruptor:
                 out = [(time_s, altered)]
             elif topic == "controls" and kind == "lost_controls":
                 out = []
+            elif topic == "state" and kind == "glitch_30mps":
+                altered[VELOCITY_NORTH] += 30.0
+                out = [(time_s, altered)]
+            elif topic == "air_data" and kind == "air_data_lost":
+                out = []
             elif kind == "duplicate" and topic in self.previous:
                 out.append(self.previous[topic])
             elif kind == "backwards":
                 out.append((time_s - 5.0, values))
             elif kind == "far_ahead":
                 out.append((1e6, values))
-            elif kind == "residual_1e300" and topic == "state":
+            elif kind in INJECTED and topic == "state":
                 stamp_s = injected_stamp(event, self.period_s)
                 # in order: after the real residual before it has reached the estimator
                 self.wait_for_estimate(stamp_s - 0.5 * self.period_s)
-                self.residual_publisher.publish(absurd_residual(stamp_s))
+                self.residual_publisher.publish(absurd_residual(stamp_s, kind))
         self.previous[topic] = (time_s, values)
         return out
 
@@ -129,11 +138,15 @@ def injected_stamp(event: Event, period_s: float) -> float:
     return round((math.floor(event.start_s / period_s + 1e-6) + 0.5) * period_s, 6)
 
 
-def absurd_residual(time_s: float) -> Residuals:
+def absurd_residual(time_s: float, kind: str) -> Residuals:
+    """The residual an INJECTED event sends: y of 1e300, S of 1e300 or wind_source 7."""
     columns = len(PAPER_FAULT_NAMES)
-    return Residuals(header=header(time_s), residual=[1e300] * 6, observed=[0.0] * 6,
-                     predicted=[0.0] * 6, valid=[True] * 6, wind_source=Residuals.WIND_AIR_DATA,
-                     fault_names=list(PAPER_FAULT_NAMES), sensitivity=[0.0] * 6 * columns)
+    return Residuals(
+        header=header(time_s), residual=[1e300 if kind == "residual_1e300" else 0.0] * 6,
+        observed=[0.0] * 6, predicted=[0.0] * 6, valid=[True] * 6,
+        wind_source=7 if kind == "wind_source_7" else Residuals.WIND_AIR_DATA,
+        fault_names=list(PAPER_FAULT_NAMES),
+        sensitivity=[1e300 if kind == "sensitivity_1e300" else 0.0] * 6 * columns)
 
 
 def rss_mb(pid: int) -> float:
@@ -197,8 +210,9 @@ def main() -> int:
         replayer.play(flight, CLEAN, DIRTY, Corruptor(events, residual_publisher,
                                                       RESIDUAL_PERIOD_S, wait_for_estimate))
         expected = round(arguments.duration / RESIDUAL_PERIOD_S)
+        # each answered by an INVALID_DATA estimate; wind_source 7 is dropped unanswered
         injected = {injected_stamp(e, RESIDUAL_PERIOD_S) for e in events
-                    if e.kind == "residual_1e300"}
+                    if e.kind in ("residual_1e300", "sensitivity_1e300")}
         graph.spin(120.0, until=lambda: len(clean) >= expected
                    and len(dirty) >= expected + len(injected))
         graph.spin(2.0)
