@@ -122,6 +122,18 @@ def test_stamp_matcher_releases_complete_sets_in_stamp_order() -> None:
 
 
 @pytest.mark.timeout(30)
+def test_the_matcher_holds_at_most_pending_max_stamps() -> None:
+    """A required stream that stopped: the sets waiting for it are dropped, oldest first,
+    beyond pending_max, instead of piling up; when it comes back, its sets go out."""
+    matcher = StampMatcher(("state", "controls"), pending_max=3)
+    for stamp in range(1, 11):
+        assert matcher.add("state", stamp, f"s{stamp}") == []
+    assert sorted(matcher.pending) == [8, 9, 10] and matcher.dropped_sets == 7
+    assert matcher.add("controls", 9, "c9") == [(9, {"state": "s9", "controls": "c9"})]
+    assert matcher.dropped_sets == 8  # 8 never got its controls
+
+
+@pytest.mark.timeout(30)
 def test_an_optional_stream_is_waited_for_until_late_lost_or_waited_out() -> None:
     published = {"air": True}
     matcher = StampMatcher(("state",), ("air",), lambda stream: published[stream],

@@ -123,6 +123,8 @@ class StampMatcher:
     sensor) costs one wait, not one a set. A stream that has delivered a newer stamp is not
     waited for (one publisher's messages come in order: the one missing was lost). Older
     sets whose required part never completed are dropped when a newer one is released, and
+    counted; beyond pending_max stamps held (a required stream that stopped, or one running
+    further ahead than that), the oldest goes: released if complete, else dropped and
     counted. The caller guards each required stream's stamps (StampGuard) before adding.
     """
 
@@ -130,6 +132,7 @@ class StampMatcher:
     optional: tuple[str, ...] = ()
     awaited: Callable[[str], bool] = lambda stream: True
     optional_wait: int = 20
+    pending_max: int = 400  # 20 s of 20 Hz sensor samples
     pending: dict[int, dict[str, Any]] = field(default_factory=dict)
     released_ns: int | None = None  # the newest released set's stamp
     dropped_sets: int = 0
@@ -182,4 +185,12 @@ class StampMatcher:
             self.abandoned.update(missing)
             released.append((stamp, self.pending.pop(stamp)))
             self.released_ns = stamp
+        while len(self.pending) > self.pending_max:
+            stamp = min(self.pending)
+            entry = self.pending.pop(stamp)
+            if self._complete(entry):
+                released.append((stamp, entry))
+                self.released_ns = stamp
+            else:
+                self.dropped_sets += 1
         return released
