@@ -25,14 +25,16 @@ from uav_fault_estimator.flight_logs.streams import FlightLog
 from uav_fault_estimator.flight_logs.topics import (
     MEANINGS,
     LogStreams,
+    TopicMeaning,
     checked_topics,
     message_times_s,
     padded_rows,
 )
 
 NANOSECONDS_ABOVE = 1e12  # a log time written as an integer above this is in nanoseconds
-# Largest CSV file read [bytes]: a file is read whole, at about seven times its size in
-# memory; an hour of a 50 Hz topic is about 60 MB.
+# Largest CSV file read [bytes]: a file is read row by row, and the columns its topic
+# needs are held as text, several times their size; an hour of a 50 Hz topic is about
+# 60 MB.
 MAX_FILE_BYTES = 256 * 2**20
 # Log times (`time`) must be finite, below MAX_LOG_TIME_S (the year 5138) and in order:
 # back by at most TIME_BACK_TOLERANCE_S (exporters write rows of one instant out of
@@ -59,8 +61,8 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
     folder = Path(folder)
     topics = checked_topics(topics)
     files = {topic_file_key(path.stem): path for path in sorted(folder.glob("*.csv"))}
-    tables = {topic: _table(files[topic_file_key(topic)]) for topic in topics
-              if topic_file_key(topic) in files}
+    tables = {topic: _table(files[topic_file_key(topic)], MEANINGS[topics[topic]])
+              for topic in topics if topic_file_key(topic) in files}
     if not files:
         raise ValueError(f"{folder}: no CSV files (one a topic, named after it)")
     log_times = [t for topic, table in tables.items()
@@ -95,23 +97,37 @@ def _named(path: Path, read: Callable[[dict[str, list[str]]], np.ndarray],
         raise ValueError(f"{path}: {error.args[0]}") from None
 
 
-def _table(path: Path) -> dict[str, list[str]]:
-    """A CSV file's columns by field path (prefixes `%`, `field.` and `.` dropped);
-    ValueError naming the file when it is too large, not text, or empty."""
+def _table(path: Path, meaning: TopicMeaning) -> dict[str, list[str]]:
+    """The columns of a CSV file that the meaning (topics.MEANINGS entry) reads, the stamps
+    and the log time, by field path (prefixes `%`, `field.` and `.` dropped), read row by
+    row: the other columns are never held. ValueError naming the file when it is too
+    large, not text, or empty."""
     size = path.stat().st_size
     if size > MAX_FILE_BYTES:
         raise ValueError(f"{path}: {size / 2**20:.0f} MiB, more than the {MAX_FILE_BYTES // 2**20}"
                          " MiB a CSV file may have here: export a shorter span of the flight")
     try:
         with path.open(newline="") as file:
-            rows = list(csv.reader(file))
+            rows = csv.reader(file)
+            names = [re.sub(r"^%?(field)?\.?", "", name.strip()) for name in next(rows, [])]
+            if not names:
+                raise ValueError(f"{path}: empty (expected a header row)")
+            kept = [k for k, name in enumerate(names) if _read_by(meaning, name)]
+            table: dict[str, list[str]] = {names[k]: [] for k in kept}
+            for row in rows:
+                for k in kept:
+                    table[names[k]].append(row[k] if k < len(row) else "")
     except (UnicodeDecodeError, csv.Error) as error:
         raise ValueError(f"{path}: not a CSV text file ({error})") from None
-    if not rows:
-        raise ValueError(f"{path}: empty (expected a header row)")
-    names = [re.sub(r"^%?(field)?\.?", "", name.strip()) for name in rows[0]]
-    return {name: [row[k] if k < len(row) else "" for row in rows[1:]]
-            for k, name in enumerate(names)}
+    return table
+
+
+def _read_by(meaning: TopicMeaning, column: str) -> bool:
+    """Whether a column is one the meaning's fields, the stamps or the log time need."""
+    if column in meaning.fields or column == "time" or column.startswith("header.stamp"):
+        return True
+    return any(_ELEMENT.match(column) and _ELEMENT.match(column)[1] == name
+               for name in meaning.array_fields)
 
 
 def _numbers(table: dict[str, list[str]], name: str) -> np.ndarray:
@@ -177,11 +193,14 @@ def _check_log_times(times_s: np.ndarray) -> None:
                          f"{MAX_TIME_STEP_S:g} s forward from one row to the next)")
 
 
+# An array's element column: "channels0", "channels_0" or "channels[0]".
+_ELEMENT = re.compile(r"^(.+?)(?:_?(\d+)|\[(\d+)\])$")
+
+
 def _array_field(table: dict[str, list[str]], name: str) -> np.ndarray:
     """An array field (n, k): from one column an element, or one column of lists."""
-    element = re.compile(rf"^{re.escape(name)}(?:_?(\d+)|\[(\d+)\])$")
-    indexed = {int(match[1] or match[2]): column for column in table
-               if (match := element.match(column))}
+    indexed = {int(match[2] or match[3]): column for column in table
+               if (match := _ELEMENT.match(column)) and match[1] == name}
     if indexed:
         return np.column_stack([_numbers(table, indexed[k]) for k in sorted(indexed)])
     if name not in table:
