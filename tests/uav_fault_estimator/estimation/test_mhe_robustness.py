@@ -3,9 +3,12 @@ its last good estimate, says why, and recovers on the next update."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
-from helpers.synthetic_residuals import SAMPLES, estimator, sequence
+from helpers.synthetic_residuals import NOISE_SD, SAMPLES, config, estimator, sequence
+from uav_fault_estimator.estimation.mhe import SUSPECT_SIGMAS, MovingHorizonEstimator
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 
@@ -27,6 +30,28 @@ def test_rows_marked_invalid_are_left_out_of_the_fit():
         assert result.fault_pct == pytest.approx(expected.fault_pct, abs=1e-9)
     print(f"final estimate {result.fault_pct} % for seeded {f[-1]} %")
     assert result.fault_pct == pytest.approx(f[-1], abs=0.5)
+
+
+@pytest.mark.timeout(60)
+def test_an_update_over_its_budget_drops_the_oldest_suspect_sample():
+    """With a budget every update overruns, a glitch of 500 noise deviations (inside the
+    gates) at sample 30 is dropped by the update it came in: from the next update on, the
+    estimates are those of an estimator that never used it. The other samples, whose
+    residuals grow with the fault far beyond SUSPECT_SIGMAS, stay: the fit explains them."""
+    y, s, _ = sequence()
+    base = config()
+    tight = MovingHorizonEstimator(dataclasses.replace(
+        base, solver=dataclasses.replace(base.solver, budget_ms=1e-6)))
+    never = estimator()
+    glitch = y[30].copy()
+    glitch[0] += 500.0 * NOISE_SD[0]
+    for k in range(SAMPLES):
+        result = tight.update(glitch if k == 30 else y[k], s[k])
+        expected = never.update(y[k], s[k], np.zeros(6, dtype=bool) if k == 30 else None)
+        if k > 30:
+            assert result.fault_pct == pytest.approx(expected.fault_pct, abs=1e-3), k
+    assert tight.overruns == SAMPLES and tight.dropped_suspects == 1
+    assert np.abs(y / NOISE_SD).max() > SUSPECT_SIGMAS
 
 
 @pytest.mark.timeout(60)

@@ -54,7 +54,8 @@ class BatchEstimator:
         Non-finite rows are left out like invalid ones.
         """
         p = len(self.config.faults)
-        gram, linear, _, _ = sample_normal_equations(y, s, valid, self.config.q_inv, p)
+        term = sample_normal_equations(y, s, valid, self.config.q_inv, p)
+        gram, linear = term.gram, term.linear
         open_gram, open_linear, count = self._open
         self._open = (open_gram + gram, open_linear + linear, count + 1)
         if count + 1 == self.cycle_samples:

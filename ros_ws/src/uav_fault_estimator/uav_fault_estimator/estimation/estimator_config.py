@@ -59,12 +59,14 @@ SOLVER_METHOD_KEY = "solver_method"  # mhe_node's /diagnostics value naming its 
 @dataclass
 class SolverSettings:
     """method: one of SOLVER_METHODS; ProxSuite's absolute/relative KKT tolerances and its
-    iteration cap."""
+    iteration cap; budget_ms: the time an update may take [ms] before the window's oldest
+    suspect sample is dropped (mhe.SUSPECT_SIGMAS)."""
 
     eps_abs: float = 1e-6
     eps_rel: float = 0.0
     max_iter: int = 200
     method: str = "proxsuite"
+    budget_ms: float = 100.0
 
 
 @dataclass
@@ -110,6 +112,8 @@ class EstimatorConfig:
             if not all(math.isfinite(v) and v > 0 for v in values):
                 raise ValueError(f"{name} entries must be positive and finite")
         models = [fault.build_model() for fault in self.faults]
+        if not self.solver.budget_ms > 0:
+            raise ValueError(f"the update budget must be positive, got {self.solver.budget_ms} ms")
         if self.solver.method not in SOLVER_METHODS:
             raise ValueError(f"solver method must be one of {', '.join(SOLVER_METHODS)}, got "
                              f"{self.solver.method!r}")
@@ -218,6 +222,7 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
         faults=faults,
         solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
                               max_iter=parameters["solver_max_iter"],
+                              budget_ms=parameters["update_budget_ms"],
                               method=parameters["solver_method"]),
         arrival_inflation=parameters["arrival_inflation"],
         arrival_floor_pct2=tuple(floor),

@@ -28,6 +28,12 @@ from uav_fault_estimator.estimation.solvers import SolveOutcome, WindowSolver, f
 # default horizon; after them the window is empty and the arrival cost has widened by as
 # many increments.
 GAP_SAMPLES_MAX = 200
+# An update over its budget (SolverSettings.budget_ms) drops the window's oldest sample
+# that its fit leaves a residual of more than this many noise deviations (Q^½): a glitch
+# the gates let through, which the fault models cannot explain, is the likeliest cause of
+# a hard window, and the next updates go without it. (A fault's own residuals are
+# explained by the fit, however large.)
+SUSPECT_SIGMAS = 10.0
 
 
 def missing_samples(gap_s: float, stamps_s: Sequence[float]) -> int:
@@ -79,6 +85,8 @@ class MovingHorizonEstimator:
         self._coefficients = np.array([term.coefficient for term in terms])
         self._q_inv = config.q_inv
         self.column_names = tuple(fault.name for fault in config.faults)
+        self.overruns = 0  # updates over the budget, since the start
+        self.dropped_suspects = 0  # samples dropped for it
         self.reset()
 
     def reset(self, prior_pct: np.ndarray | None = None) -> None:
@@ -104,6 +112,10 @@ class MovingHorizonEstimator:
         self._gram = np.zeros((n, p, p))
         self._linear = np.zeros((n, p))
         self._has_data = np.zeros(n, dtype=bool)
+        # Each sample whitened (W^½ y, W^½ S): what its fit leaves is measured in noise
+        # deviations.
+        self._whitened_y = np.zeros((n, self._q_inv.size))
+        self._whitened_s = np.zeros((n, self._q_inv.size, p))
         # The last good solution, shifted once per update: the warm start, and at stage 0
         # the previous window's estimate of the new window's first point (UAV eq. 17).
         # The window starts empty: its first point is N - 1 samples before the first one.
@@ -151,9 +163,9 @@ class MovingHorizonEstimator:
         for _ in range(min(samples, GAP_SAMPLES_MAX)):
             self.arrival.absorb(self._gram[0], self._linear[0])
             self.arrival.predict()
-            for window in (self._gram, self._linear, self._has_data):
+            for window in self._windows:
                 window[:-1] = window[1:]
-            self._gram[-1], self._linear[-1], self._has_data[-1] = 0.0, 0.0, False
+                window[-1] = 0
             self._shift_guess()
             self._window_pct = np.vstack([self._window_pct[1:], self._window_pct[-1:]])
 
@@ -197,7 +209,27 @@ class MovingHorizonEstimator:
         if outcome.status is SolveStatus.SOLVED:
             self._x, self._y_dual, self._z_dual = outcome.x, outcome.y, outcome.z
             self._window_pct = outcome.x[self.problem.f_index]
+        if (time.perf_counter() - start[0]) * 1e3 > self.config.solver.budget_ms:
+            self._drop_oldest_suspect()
         return self._result(outcome.status, outcome, start)
+
+    def _drop_oldest_suspect(self) -> None:
+        """After an update over budget: the window's oldest sample whose fit leaves a
+        residual beyond SUSPECT_SIGMAS leaves the fit (its data term zeroed), if any."""
+        self.overruns += 1
+        fitted = np.einsum("tmp,tp->tm", self._whitened_s, self._window_pct)
+        suspects = np.flatnonzero(np.abs(self._whitened_y - fitted).max(axis=1)
+                                  > SUSPECT_SIGMAS)
+        if suspects.size:
+            oldest = suspects[0]
+            for window in self._windows:
+                window[oldest] = 0
+            self.dropped_suspects += 1
+
+    @property
+    def _windows(self) -> tuple[np.ndarray, ...]:
+        """The per-sample arrays of the window, oldest sample first."""
+        return (self._gram, self._linear, self._has_data, self._whitened_y, self._whitened_s)
 
     def _solve(self) -> SolveOutcome:
         """This window's QP by the first of the solvers that settles, from the previous
@@ -213,11 +245,12 @@ class MovingHorizonEstimator:
         marked valid); it then enters the window with all channels left out, so the next
         updates are not poisoned by it.
         """
-        for window in (self._gram, self._linear, self._has_data):
+        for window in self._windows:
             window[:-1] = window[1:]
-        self._gram[-1], self._linear[-1], self._has_data[-1], clean = sample_normal_equations(
-            y, s, valid, q_inv, self._linear.shape[1])
-        return clean
+        term = sample_normal_equations(y, s, valid, q_inv, self._linear.shape[1])
+        self._gram[-1], self._linear[-1], self._has_data[-1] = term.gram, term.linear, term.entered
+        self._whitened_y[-1], self._whitened_s[-1] = term.whitened_y, term.whitened_s
+        return term.clean
 
     def _shift_guess(self) -> None:
         """Move the last good solution one sample back in time (warm start, handover)."""

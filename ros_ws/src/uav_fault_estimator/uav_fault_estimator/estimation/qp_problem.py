@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -47,31 +48,47 @@ def stage_normal_equations(
 RESIDUAL_PLAUSIBLE_SIGMAS = 1e3
 
 
+class SampleTerm(NamedTuple):
+    """One residual sample's data term: G (p, p) [1/%²], h (p,) [1/%], whether any row
+    entered, whether the sample was clean (shapes right, every row marked valid finite and
+    plausible), and the whitened sample W^½ y (m,) and W^½ S (m, p) [noise deviations; 0 on
+    rows left out], by which a fit's residuals are measured."""
+
+    gram: np.ndarray
+    linear: np.ndarray
+    entered: bool
+    clean: bool
+    whitened_y: np.ndarray
+    whitened_s: np.ndarray
+
+
 def sample_normal_equations(
     y: np.ndarray, s: np.ndarray, valid: np.ndarray | None, q_inv: np.ndarray, columns: int
-) -> tuple[np.ndarray, np.ndarray, bool, bool]:
+) -> SampleTerm:
     """One residual sample's data term, with Q⁻¹ on the rows that are valid and finite and
     0 on the others (a lost channel, a non-finite or implausible value: left out of the fit;
     implausible: |y|, or |S| of one unit of a column, beyond RESIDUAL_PLAUSIBLE_SIGMAS noise
     deviations).
 
     Inputs: y (m,) residuals; s (m, p) signatures [residual unit / %]; valid (m,) booleans
-    or None for all; q_inv (m,) [1 / residual unit²]; columns p. Returns G (p, p) [1/%²],
-    h (p,) [1/%], whether any row entered, and whether the sample was clean (shapes right,
-    every row marked valid finite and plausible). A misshapen sample enters as no data.
+    or None for all; q_inv (m,) [1 / residual unit²]; columns p. A misshapen sample enters
+    as no data.
     """
     m, p = q_inv.size, columns
     y, s = np.asarray(y, dtype=float), np.asarray(s, dtype=float)
     keep = np.ones(m, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
     if y.shape != (m,) or s.shape != (m, p) or keep.shape != (m,):
-        return np.zeros((p, p)), np.zeros(p), False, False
+        return SampleTerm(np.zeros((p, p)), np.zeros(p), False, False, np.zeros(m),
+                          np.zeros((m, p)))
     limit = RESIDUAL_PLAUSIBLE_SIGMAS / np.sqrt(q_inv)
     # Comparisons with NaN are False: a non-finite entry is implausible too.
     finite = (np.abs(y) <= limit) & np.all(np.abs(s) <= limit[:, None], axis=1)
     weight = np.where(keep & finite, q_inv, 0.0)
-    gram, linear = stage_normal_equations(np.where(finite, y, 0.0)[None],
-                                          np.where(finite[:, None], s, 0.0)[None], weight[None])
-    return gram[0], linear[0], bool(weight.any()), bool(np.all(finite[keep]))
+    y, s = np.where(finite, y, 0.0), np.where(finite[:, None], s, 0.0)
+    gram, linear = stage_normal_equations(y[None], s[None], weight[None])
+    root = np.sqrt(weight)
+    return SampleTerm(gram[0], linear[0], bool(weight.any()), bool(np.all(finite[keep])),
+                      root * y, root[:, None] * s)
 
 
 def _grid(first: int, stages: int, width: int) -> np.ndarray:

@@ -36,6 +36,7 @@ from uav_fault_estimator.estimation.estimator_config import (
     suite_noise,
 )
 from uav_fault_estimator.estimation.mhe import (
+    SUSPECT_SIGMAS,
     EstimateResult,
     MovingHorizonEstimator,
     missing_samples,
@@ -97,6 +98,9 @@ PARAMETERS = {
                                     1e-12, 0.1, live=True),
     "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000,
                                      live=True),
+    "update_budget_ms": ParameterSpec(
+        "an update longer than this drops the window's oldest sample beyond "
+        f"{SUSPECT_SIGMAS:g} noise deviations [ms]", 0.01, 60000.0, live=True),
     "state_file": ParameterSpec(
         "file for the last estimate: a restart within the flight (a first residual later "
         "than the saved one) starts from it; empty: none"),
@@ -263,7 +267,9 @@ class MheNode(Node):
 
     def health(self) -> dict[str, Any]:
         """The counters /diagnostics shows, the stamp guard's strays among them."""
-        return {**self.counts, "stray_stamps": self.stamps.strays}
+        return {**self.counts, "stray_stamps": self.stamps.strays,
+                "budget_overruns": self.estimator.overruns,
+                "dropped_suspects": self.estimator.dropped_suspects}
 
     def count(self, result: EstimateResult) -> None:
         """Counters and solve times for /diagnostics."""
