@@ -13,7 +13,7 @@ import pytest
 from uav_common.channels import AIR_DATA_CHANNELS
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
-from uav_fault_estimator.offline import fly_and_estimate
+from uav_fault_estimator.offline import each_in_processes, fly_and_estimate
 from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
 from uav_sim.paths import scenarios_dir
@@ -91,10 +91,10 @@ def test_a_30_s_air_data_loss_in_fault_free_flights_not_tuned_on():
     the loss begins. (Before it, seed 15 reads 2.4 % at 20 s with or without a loss.)"""
     scenario = load_scenario(scenarios_dir() / "fault_free.yaml")
     lost = tuple(SensorDropout(channel, 100.0, 130.0) for channel in AIR_DATA_CHANNELS)
-    largest = {}
-    for seed in range(11, 17):
-        estimates, _ = fly_and_estimate(dataclasses.replace(scenario, seed=seed,
-                                                            sensor_dropouts=lost))
-        largest[seed] = float(estimates.values_pct[estimates.stamps_s >= 100.0].max())
+    seeds = range(11, 17)
+    flights = each_in_processes(fly_and_estimate, [
+        dataclasses.replace(scenario, seed=seed, sensor_dropouts=lost) for seed in seeds])
+    largest = {seed: float(estimates.values_pct[estimates.stamps_s >= 100.0].max())
+               for seed, (estimates, _) in zip(seeds, flights, strict=True)}
     print("largest fault-free estimate from the loss on, per seed [%]:", largest)
     assert max(largest.values()) < THRESHOLD_PCT
