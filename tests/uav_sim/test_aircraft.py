@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from uav_common.channels import FAULT_NAMES
 from uav_sim.aircraft import M_PER_FT, create_fdm, set_faults
+from uav_sim.flown_aircraft import COEFFICIENT_PROPERTY, FlownAircraft, coefficient_names
 from uav_sim.propeller import Propeller
 from uav_sim.simulation import spin_up_engine
 from uav_sim.trim import trim_level_flight
@@ -145,3 +146,27 @@ def test_propulsion_loss_takes_its_share_of_the_thrust(trimmed):
     thrust_lbf = fdm["propulsion/engine/thrust-lbs"]
     set_faults(fdm, {"propulsion_loss": 0.0})
     assert loss_lbf == pytest.approx(0.2 * thrust_lbf, rel=1e-3)
+
+
+@pytest.mark.timeout(60)
+def test_a_flown_aircraft_differs_where_it_says_and_only_there():
+    """Mass, inertia and CG from an edited copy of aerosonde.xml; coefficients and thrust
+    as scaled properties; every other coefficient the file's."""
+    nominal = create_fdm()
+    flown = create_fdm(aircraft=FlownAircraft(
+        mass_scale=1.1, inertia_scale=(1.0, 1.2, 1.0), cg_offset_m=(0.01, 0.0, 0.0),
+        thrust_scale=0.9, coefficients=(("CLalpha", 0.95), ("Cm0", 1.1))))
+    for fdm in (nominal, flown):
+        fdm["propulsion/fuel-loaded-lbs"] = 0.0  # the empty aircraft
+        fdm.run_ic()
+    assert flown["inertia/empty-weight-lbs"] == pytest.approx(
+        1.1 * nominal["inertia/empty-weight-lbs"], rel=1e-12)
+    # structural x points aft: 1 cm forward is 0.3937 in less
+    assert flown["inertia/cg-x-in"] == pytest.approx(nominal["inertia/cg-x-in"] - 0.3937,
+                                                     abs=1e-3)
+    assert flown["propulsion/thrust-scale"] == 0.9
+    for name in coefficient_names():
+        prop = COEFFICIENT_PROPERTY.format(name=name)
+        scale = {"CLalpha": 0.95, "Cm0": 1.1}.get(name, 1.0)
+        assert flown[prop] == pytest.approx(scale * nominal[prop], rel=1e-12), name
+    assert len(coefficient_names()) == 31 and "CDinduced" in coefficient_names()

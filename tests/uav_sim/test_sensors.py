@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from helpers.flights import column, fly
 from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
+from uav_sim.flown_aircraft import FlownAircraft, SensorBias
 from uav_sim.frames import wind_triangle_ned_mps
 from uav_sim.scenario import SensorSuite
 from uav_sim.sensors import (
@@ -158,3 +159,17 @@ def test_wind_triangle_recovers_the_true_wind(default_flight):
           f"{expected.round(3)} m/s, mean {error.mean(axis=0).round(3)} m/s")
     assert error.std(axis=0) == pytest.approx(expected, rel=0.10)
     assert np.abs(error.mean(axis=0)).max() < 4 * expected.max() / np.sqrt(len(error))
+
+
+@pytest.mark.timeout(120)
+def test_a_flown_aircrafts_air_data_bias_is_in_every_sample(default_scenario):
+    """Ideal sensors on a flown aircraft with a pitot reading 2 % high and vanes 0.5 and
+    -0.3 deg off: the measured air data is the true one so biased, sample for sample."""
+    bias = SensorBias(airspeed_scale=1.02, angle_of_attack_deg=0.5, sideslip_deg=-0.3)
+    scenario = dataclasses.replace(short(default_scenario, default_scenario.seed, 5.0,
+                                         noise=False), aircraft=FlownAircraft(sensor_bias=bias))
+    samples = fly(scenario)
+    measured, true = column(samples, "air_data"), column(samples, "true_air_data")
+    np.testing.assert_allclose(measured[:, 0], 1.02 * true[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(measured[:, 1:] - true[:, 1:],
+                               np.tile(np.radians([0.5, -0.3]), (len(samples), 1)), atol=1e-12)

@@ -11,10 +11,10 @@ import os
 import jsbsim
 import numpy as np
 
+from uav_sim.flown_aircraft import MODEL, NOMINAL, FlownAircraft, aircraft_folder, apply_to
 from uav_sim.paths import jsbsim_root
 from uav_sim.propeller import PropellerForces
 
-MODEL = "aerosonde"
 # 480 Hz: JSBSim's explicit propeller-speed update diverges at 120 Hz when the propeller
 # spins up (inertia 0.002 kg m^2 against 1.4 kW); 480 Hz is stable (measured).
 JSBSIM_DT_S = 1.0 / 480.0
@@ -52,13 +52,18 @@ BODY_ACCELERATIONS = (
 )
 
 
-def create_fdm(dt_s: float = JSBSIM_DT_S) -> jsbsim.FGFDMExec:
-    """A silent JSBSim executive with the Aerosonde loaded, at time step dt_s [s]."""
+def create_fdm(dt_s: float = JSBSIM_DT_S,
+               aircraft: FlownAircraft = NOMINAL) -> jsbsim.FGFDMExec:
+    """A silent JSBSim executive with the Aerosonde loaded, at time step dt_s [s]; as the
+    flown aircraft says where it differs (the prediction models keep the nominal one)."""
     os.environ.setdefault("JSBSIM_DEBUG", "0")  # no start-up banner on stdout
     fdm = jsbsim.FGFDMExec(str(jsbsim_root()), None)
     fdm.set_debug_level(0)
+    folder = aircraft_folder(aircraft)
+    fdm.set_aircraft_path(str(folder))
     if not fdm.load_model(MODEL):
-        raise RuntimeError(f"JSBSim could not load the aircraft '{MODEL}' from {jsbsim_root()}")
+        raise RuntimeError(f"JSBSim could not load the aircraft '{MODEL}' from {folder}")
+    apply_to(fdm, aircraft)
     fdm.set_dt(dt_s)
     return fdm
 

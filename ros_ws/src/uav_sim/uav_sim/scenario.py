@@ -1,8 +1,9 @@
 """Scenario files (docs/design.md schema): load, check every key, and fail with one clear message.
 
 A scenario names the flight (start, waypoints, duration), the wind and turbulence, the
-sensors on board, the faults seeded into the aircraft and the sensor dropouts of the state
-and air-data streams. Loading is
+sensors on board, how the flown aircraft differs from the model (uav_sim.flown_aircraft),
+the faults seeded into the aircraft and the sensor dropouts of the state and air-data
+streams. Loading is
 strict: an unknown or missing key, a wrong type or an impossible value stops with a
 ScenarioError naming the file and the key, before anything starts.
 """
@@ -16,6 +17,15 @@ from typing import Any
 from uav_common.channels import AIR_DATA_CHANNELS, DROPOUT_CHANNELS, FAULT_NAMES
 from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
 
+from uav_sim.flown_aircraft import (
+    BIAS_LIMIT_DEG,
+    CG_OFFSET_LIMIT_M,
+    NOMINAL,
+    SCALE_RANGE,
+    FlownAircraft,
+    SensorBias,
+    coefficient_names,
+)
 from uav_sim.paths import scenarios_dir
 
 # from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
@@ -105,6 +115,7 @@ class Scenario:
     waypoints_ne_m: tuple[tuple[float, float], ...]
     wind: Wind
     sensors: SensorSuite = SensorSuite()
+    aircraft: FlownAircraft = NOMINAL
     faults: tuple[SeededFault, ...] = ()
     sensor_dropouts: tuple[SensorDropout, ...] = ()
     estimator: dict[str, Any] = field(default_factory=dict)
@@ -151,6 +162,53 @@ def _wind(reader: Reader) -> Wind:
 def _sensors(reader: Reader) -> SensorSuite:
     reader.check_keys(set(), {"air_data", "noise"})
     return SensorSuite(air_data=reader.flag("air_data", True), noise=reader.flag("noise", True))
+
+
+def _scale(reader: Reader, name: str) -> float:
+    return reader.number(name, minimum=SCALE_RANGE[0], maximum=SCALE_RANGE[1])
+
+
+def _triple(reader: Reader, name: str, low: float, high: float) -> tuple[float, float, float]:
+    """[x, y, z], each in low..high."""
+    values = reader.items(name)
+    if len(values) != 3 or not all(map(is_number, values)) or not all(
+            low <= value <= high for value in values):
+        reader.fail(f"'{reader.key(name)}' must be [x, y, z], each in {low:g}..{high:g}, "
+                    f"got {values!r}")
+    return tuple(float(value) for value in values)
+
+
+def _aircraft(reader: Reader) -> FlownAircraft:
+    reader.check_keys(set(), {"mass_scale", "inertia_scale", "cg_offset_m", "thrust_scale",
+                              "coefficients", "sensor_bias"})
+    data = reader.data
+    coefficients = reader.child("coefficients") if "coefficients" in data else None
+    if coefficients is not None:
+        coefficients.check_keys(set(), set(coefficient_names()))
+    bias = reader.child("sensor_bias") if "sensor_bias" in data else None
+    if bias is not None:
+        bias.check_keys(set(), {"airspeed_scale", "angle_of_attack_deg", "sideslip_deg"})
+
+    def angle(name: str) -> float:
+        if bias is None or name not in bias.data:
+            return 0.0
+        return bias.number(name, minimum=-BIAS_LIMIT_DEG, maximum=BIAS_LIMIT_DEG)
+
+    return FlownAircraft(
+        mass_scale=_scale(reader, "mass_scale") if "mass_scale" in data else 1.0,
+        inertia_scale=(_triple(reader, "inertia_scale", *SCALE_RANGE)
+                       if "inertia_scale" in data else (1.0, 1.0, 1.0)),
+        cg_offset_m=(_triple(reader, "cg_offset_m", -CG_OFFSET_LIMIT_M, CG_OFFSET_LIMIT_M)
+                     if "cg_offset_m" in data else (0.0, 0.0, 0.0)),
+        thrust_scale=_scale(reader, "thrust_scale") if "thrust_scale" in data else 1.0,
+        coefficients=tuple((name, _scale(coefficients, name))
+                           for name in (coefficients.data if coefficients else ())),
+        sensor_bias=SensorBias(
+            airspeed_scale=(_scale(bias, "airspeed_scale")
+                            if bias is not None and "airspeed_scale" in bias.data else 1.0),
+            angle_of_attack_deg=angle("angle_of_attack_deg"),
+            sideslip_deg=angle("sideslip_deg")),
+    )
 
 
 def _waypoints(reader: Reader) -> tuple[tuple[float, float], ...]:
@@ -201,7 +259,7 @@ def load_scenario(path: str | Path) -> Scenario:
     data = reader.data
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
-        {"sensors", "faults", "sensor_dropouts", "estimator"},
+        {"sensors", "aircraft", "faults", "sensor_dropouts", "estimator"},
     )
     if reader.text("name") in (".", "..") or any(c in data["name"] for c in "/\\\0"):
         # demo.sh's default output folder is runs/<name>/
@@ -230,6 +288,7 @@ def load_scenario(path: str | Path) -> Scenario:
         waypoints_ne_m=_waypoints(reader),
         wind=_wind(reader.child("wind")),
         sensors=sensors,
+        aircraft=_aircraft(reader.child("aircraft")) if "aircraft" in data else NOMINAL,
         faults=tuple(
             _fault(reader.element("faults", index))
             for index in range(len(reader.items("faults")))

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
 
+from uav_sim.flown_aircraft import SensorBias
 from uav_sim.frames import EARTH_RADIUS_M
 
 
@@ -114,8 +115,10 @@ class SensorModel:
     """Measured state, controls and air data from the true ones, one sample at a time."""
 
     def __init__(self, noise: bool, period_s: float, latitude_rad: float,
-                 state_rng: np.random.Generator, air_data_rng: np.random.Generator) -> None:
+                 state_rng: np.random.Generator, air_data_rng: np.random.Generator,
+                 air_data_bias: SensorBias = SensorBias()) -> None:
         self.noise = noise
+        self.air_data_bias = None if air_data_bias == SensorBias() else air_data_bias
         self.state_errors = ChannelErrors(STATE_CHANNELS, STATE_NOISE, state_scale(latitude_rad),
                                           period_s, state_rng)
         self.control_errors = ChannelErrors(CONTROL_CHANNELS, CONTROL_NOISE,
@@ -127,8 +130,19 @@ class SensorModel:
     def measure(self, state: np.ndarray, controls: np.ndarray,
                 air_data: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Measured (state, controls, air data) of the true ones (arrays in uav_common.channels
-        order); without noise, the true arrays themselves."""
+        order); without noise, the true arrays themselves. The air data's bias (the flown
+        aircraft's sensors) applies with or without noise."""
+        if self.air_data_bias is not None:
+            air_data = biased_air_data(air_data, self.air_data_bias)
         if not self.noise:
             return state, controls, air_data
         return (state + self.state_errors.next(), controls + self.control_errors.next(),
                 air_data + self.air_data_errors.next())
+
+
+def biased_air_data(air_data: np.ndarray, bias: SensorBias) -> np.ndarray:
+    """(airspeed [m/s], alpha, beta [rad]) as sensors with this bias read them."""
+    airspeed_mps, alpha_rad, beta_rad = air_data
+    return np.array([airspeed_mps * bias.airspeed_scale,
+                     alpha_rad + math.radians(bias.angle_of_attack_deg),
+                     beta_rad + math.radians(bias.sideslip_deg)])

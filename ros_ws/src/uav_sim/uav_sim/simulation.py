@@ -100,7 +100,7 @@ class Simulation:
         self.steps_per_sample = steps
         self.period_s = steps * JSBSIM_DT_S
         self.sample_count = 0
-        self.fdm = create_fdm()
+        self.fdm = create_fdm(aircraft=scenario.aircraft)
         self.trim = self._start()
         # North-east origin: where the flight starts. The engine spin-up held the aircraft
         # fixed in inertial space while the earth turned (about 250 m east per second at 55 N).
@@ -113,7 +113,8 @@ class Simulation:
         self.sensors = SensorModel(
             scenario.sensors.noise, self.period_s, self.origin_rad[0],
             np.random.default_rng([scenario.seed, STATE_SENSOR_STREAM]),
-            np.random.default_rng([scenario.seed, AIR_DATA_SENSOR_STREAM]))
+            np.random.default_rng([scenario.seed, AIR_DATA_SENSOR_STREAM]),
+            scenario.aircraft.sensor_bias)
         self.turbulence = None
         if scenario.wind.turbulence == FROM_WIND:
             self.turbulence = von_karman_turbulence(
