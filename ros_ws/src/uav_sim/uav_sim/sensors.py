@@ -116,9 +116,9 @@ class SensorModel:
 
     def __init__(self, noise: bool, period_s: float, latitude_rad: float,
                  state_rng: np.random.Generator, air_data_rng: np.random.Generator,
-                 air_data_bias: SensorBias = SensorBias()) -> None:
+                 air_data_bias: SensorBias | None = None) -> None:
         self.noise = noise
-        self.air_data_bias = None if air_data_bias == SensorBias() else air_data_bias
+        self.air_data_bias = None if air_data_bias in (None, SensorBias()) else air_data_bias
         self.state_errors = ChannelErrors(STATE_CHANNELS, STATE_NOISE, state_scale(latitude_rad),
                                           period_s, state_rng)
         self.control_errors = ChannelErrors(CONTROL_CHANNELS, CONTROL_NOISE,
