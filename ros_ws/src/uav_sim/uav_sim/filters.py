@@ -36,3 +36,22 @@ class LowPass:
             # Exact solution over the interval: y += (1 - exp(-dt/tau)) (u - y).
             self.output += -math.expm1(-dt_s / self.tau_s) * (value - self.output)
         return self.output
+
+
+class SettlingLowPass(LowPass):
+    """LowPass that starts as the running mean of its inputs: until tau_s of input, the
+    output is their time-weighted mean, then the low-pass (whose start-up would otherwise
+    carry the first input's error for several tau)."""
+
+    def reset(self) -> None:
+        super().reset()
+        self.elapsed_s = 0.0
+
+    def update(self, value: np.ndarray, dt_s: float) -> np.ndarray:
+        if self.output is None:
+            self.elapsed_s = dt_s
+            return super().update(value, dt_s)
+        self.elapsed_s += dt_s
+        gain = max(dt_s / self.elapsed_s, -math.expm1(-dt_s / self.tau_s))
+        self.output += gain * (value - self.output)
+        return self.output

@@ -19,7 +19,7 @@ import functools
 import math
 import re
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -45,6 +45,9 @@ class SensorBias:
     sideslip_deg: float = 0.0
 
 
+NO_BIAS = SensorBias()
+
+
 @dataclass(frozen=True)
 class FlownAircraft:
     """How the flown aircraft differs from the model (all 1 or 0: it is the model).
@@ -60,7 +63,7 @@ class FlownAircraft:
     cg_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
     thrust_scale: float = 1.0
     coefficients: tuple[tuple[str, float], ...] = ()
-    sensor_bias: SensorBias = field(default_factory=SensorBias)
+    sensor_bias: SensorBias = NO_BIAS
 
     @property
     def changes_mass_balance(self) -> bool:
@@ -139,7 +142,7 @@ def _scaled_element(text: str, tag: str, scale: float) -> str:
     pattern = re.compile(rf"(<{tag} unit=\"[^\"]+\">\s*)([-0-9.eE+]+)(\s*</{tag}>)")
     if len(pattern.findall(text)) != 1:
         raise ValueError(f"{aircraft_file()}: expected one <{tag}>")
-    return pattern.sub(lambda m: f"{m[1]}{float(m[2]) * scale!r}{m[3]}", text)
+    return pattern.sub(lambda m: f"{m[1]}{float(m[2]) * float(scale)!r}{m[3]}", text)
 
 
 def _shifted_cg(text: str, axis: str, offset_m: float) -> str:
@@ -149,5 +152,5 @@ def _shifted_cg(text: str, axis: str, offset_m: float) -> str:
     if match is None:
         raise ValueError(f"{aircraft_file()}: no CG location in metres")
     moved = re.sub(rf"(<{axis}>\s*)([-0-9.eE+]+)(\s*</{axis}>)",
-                   lambda m: f"{m[1]}{float(m[2]) + offset_m!r}{m[3]}", match[1])
+                   lambda m: f"{m[1]}{float(m[2]) + float(offset_m)!r}{m[3]}", match[1])
     return text[:match.start()] + moved + text[match.end():]

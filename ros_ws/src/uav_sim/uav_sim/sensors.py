@@ -146,3 +146,12 @@ def biased_air_data(air_data: np.ndarray, bias: SensorBias) -> np.ndarray:
     return np.array([airspeed_mps * bias.airspeed_scale,
                      alpha_rad + math.radians(bias.angle_of_attack_deg),
                      beta_rad + math.radians(bias.sideslip_deg)])
+
+
+def true_air_data(measured: np.ndarray, bias: SensorBias) -> np.ndarray:
+    """The (airspeed [m/s], alpha, beta [rad]) that sensors with this bias read as measured:
+    biased_air_data's inverse."""
+    airspeed_mps, alpha_rad, beta_rad = measured
+    return np.array([airspeed_mps / bias.airspeed_scale,
+                     alpha_rad - math.radians(bias.angle_of_attack_deg),
+                     beta_rad - math.radians(bias.sideslip_deg)])

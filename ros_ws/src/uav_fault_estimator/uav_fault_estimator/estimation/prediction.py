@@ -13,6 +13,8 @@ without integrating. Per evaluation:
   measured engine speed come from the same propeller tables (uav_sim.propeller) and act
   through the aircraft's `propeller_model` reactions.
 - Mass: the fuel on board is the measured fuel mass.
+- Aircraft: aerosonde.xml as shipped, or as a model calibration (model_calibration.py) says
+  the flown aircraft differs from it (a FlownAircraft: mass, coefficient and thrust scales).
 - run_ic() runs twice: the first gives air density and effective throttle for the
   propeller, and the accelerations from which JSBSim forms alpha-dot in the second.
 
@@ -45,6 +47,7 @@ from uav_sim.aircraft import (
     create_fdm,
     set_faults,
 )
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
 
@@ -76,15 +79,17 @@ _POSITION_AND_ATTITUDE = {
 
 
 class AircraftPredictor:
-    """phi(x | f) for one fixed fault vector f: a JSBSim Aerosonde of its own."""
+    """phi(x | f) for one fixed fault vector f: a JSBSim Aerosonde of its own, the shipped
+    one or as `aircraft` says the flown one differs."""
 
-    def __init__(self, faults_pct: Mapping[str, float], propeller: Propeller) -> None:
+    def __init__(self, faults_pct: Mapping[str, float], propeller: Propeller,
+                 aircraft: FlownAircraft = NOMINAL) -> None:
         unknown = sorted(set(faults_pct) - set(FAULT_NAMES))
         if unknown:
             raise ValueError(f"unknown fault names {unknown}; known: {', '.join(FAULT_NAMES)}")
         self.faults_pct = dict(faults_pct)
         self.propeller = propeller
-        self.fdm: jsbsim.FGFDMExec = create_fdm()
+        self.fdm: jsbsim.FGFDMExec = create_fdm(aircraft=aircraft)
         self.fdm[JSBSIM_ENGINE_ON] = 0
         set_faults(self.fdm, self.faults_pct)
 
@@ -130,16 +135,20 @@ class AircraftPredictor:
         return np.concatenate([to_body.T @ velocity_rate_body, derivatives[3:]])
 
 
-def aircraft_predictor_factory() -> PredictorFactory:
-    """Makes AircraftPredictor copies that share one set of propeller tables."""
+def aircraft_predictor_factory(aircraft: FlownAircraft = NOMINAL) -> PredictorFactory:
+    """Makes AircraftPredictor copies of one aircraft that share one set of propeller
+    tables."""
     propeller = Propeller.from_aircraft()
-    return lambda faults_pct: AircraftPredictor(faults_pct, propeller)
+    return lambda faults_pct: AircraftPredictor(faults_pct, propeller, aircraft)
 
 
-def residual_generator(parameters: Mapping[str, Any]) -> ResidualGenerator:
-    """residual_node's generator from its parameters (config/residual_node.yaml's keys)."""
+def residual_generator(parameters: Mapping[str, Any],
+                       model: FlownAircraft = NOMINAL) -> ResidualGenerator:
+    """residual_node's generator from its parameters (config/residual_node.yaml's keys), its
+    models the aircraft a model calibration found (model; its air-data bias taken out)."""
     p = parameters
     return ResidualGenerator(
-        aircraft_predictor_factory(), p["fault_names"], p["secant_step_pct"], p["tau_a_s"],
-        p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
+        aircraft_predictor_factory(model), p["fault_names"], p["secant_step_pct"],
+        p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
+        model.sensor_bias,
     )

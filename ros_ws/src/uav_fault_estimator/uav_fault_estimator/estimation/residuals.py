@@ -41,8 +41,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from uav_common.channels import STATE_CHANNELS
-from uav_sim.filters import LowPass
+from uav_sim.filters import LowPass, SettlingLowPass
+from uav_sim.flown_aircraft import NO_BIAS, SensorBias
 from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
+from uav_sim.sensors import true_air_data
 
 # phi(state (14,), controls (7,), filtered NED wind (3,)) -> (6,) [dv_ned/dt m/s^2, dpqr/dt rad/s^2]
 Prediction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -56,6 +58,12 @@ _INDEX = {name: index for index, name in enumerate(STATE_CHANNELS)}
 VELOCITY = [_INDEX[name] for name in ("velocity_north", "velocity_east", "velocity_down",
                                       "roll_rate", "pitch_rate", "yaw_rate")]
 ATTITUDE = [_INDEX[name] for name in ("roll", "pitch", "yaw")]
+FUEL_MASS = _INDEX["fuel_mass"]
+# The fuel gauge's reading is smoothed before the models take it: a full tank's contents are
+# clipped at its capacity, so a gauge's white noise (0.1 kg a sample) makes the models'
+# mean mass too low (measured: lift residual biased by 0.36 of its noise deviation on
+# fault-free flights). Fuel burns at 0.11 g/s: 30 s lag it by 3 g.
+FUEL_MASS_TAU_S = 30.0
 
 _AIR_DATA = ("velocity_north", "velocity_east", "velocity_down", "roll", "pitch", "yaw")
 # The state channels each residual row cannot do without: its observed derivative, the
@@ -105,7 +113,8 @@ class _Column:
     faults_pct: Mapping[str, float]  # seeded into its model copy
     model: Prediction
     wind_shift_mps: np.ndarray
-    step: float  # [%] for a fault, [m/s] for a wind error
+    step: float  # [%] for a fault, [m/s] for a wind error, a bias's own unit for a bias
+    sensor_bias: SensorBias | None = None  # the bias its air data is corrected with
 
 
 @dataclass(frozen=True)
@@ -141,7 +150,12 @@ class ResidualGenerator:
         sensitivity_period_s: float,
         recovery_s: float,
         wind_error_step_mps: float = 0.0,
+        sensor_bias: SensorBias = NO_BIAS,
+        bias_steps: Mapping[str, float] | None = None,
     ) -> None:
+        """sensor_bias: the air-data bias taken out of measured air data; bias_steps:
+        SensorBias field -> secant step (its unit) for a column of S per bias, named by the
+        field (0 on samples that fly the filtered wind)."""
         if not secant_step_pct > 0:
             raise ValueError(f"secant step must be positive, got {secant_step_pct} %")
         if not wind_error_step_mps >= 0:
@@ -162,16 +176,25 @@ class ResidualGenerator:
                         wind_error_step_mps)
                 for axis, name in enumerate(WIND_ERROR_NAMES)
             ]
+        self.sensor_bias = sensor_bias
+        self.columns += [
+            _Column(name, {}, predictor_factory({}), np.zeros(3), step,
+                    dataclasses.replace(sensor_bias,
+                                        **{name: getattr(sensor_bias, name) + step}))
+            for name, step in (bias_steps or {}).items()
+        ]
         self.model_rebuilds = 0  # times the model copies gave NaN and were made anew
         self.column_names = tuple(column.name for column in self.columns)
         self.observed_filter = LowPass(tau_a_s)
         self.predicted_filter = LowPass(tau_a_s)
+        self.fuel_filter = SettlingLowPass(FUEL_MASS_TAU_S)
         self.reset()
 
     def reset(self) -> None:
         """Forget all history (a restarted source): the next sample starts afresh."""
         self.observed_filter.reset()
         self.predicted_filter.reset()
+        self.fuel_filter.reset()
         self.last_time_s: float | None = None
         self.last_velocity: np.ndarray | None = None
         self.last_prediction: np.ndarray | None = None
@@ -184,13 +207,18 @@ class ResidualGenerator:
         self.latest: ResidualSample | None = None
 
     def _prediction(self, state: np.ndarray, controls: np.ndarray, wind: np.ndarray,
-                    time_s: float) -> np.ndarray:
-        """P = [phi(x|0), S_raw] (6, 1 + columns); S_raw recomputed when its period is due."""
+                    time_s: float, air_data: np.ndarray | None) -> np.ndarray:
+        """P = [phi(x|0), S_raw] (6, 1 + columns); S_raw recomputed when its period is due.
+        air_data: the measured air data the models fly, None when they fly the filtered
+        wind."""
         nominal = np.asarray(self.nominal(state, controls, wind), dtype=float)
         if time_s >= self.next_sensitivity_s or self.raw_sensitivity is None:
             self.raw_sensitivity = np.zeros((6, len(self.columns)))
             for j, column in enumerate(self.columns):
-                shifted = column.model(state, controls, wind + column.wind_shift_mps)
+                column_wind = wind + column.wind_shift_mps
+                if column.sensor_bias is not None and air_data is not None:
+                    column_wind = _air_data_wind(state, air_data, column.sensor_bias)
+                shifted = column.model(state, controls, column_wind)
                 self.raw_sensitivity[:, j] = (np.asarray(shifted) - nominal) / column.step
             self.next_sensitivity_s = time_s + self.sensitivity_period_s
         prediction = np.column_stack([nominal, self.raw_sensitivity])
@@ -240,12 +268,17 @@ class ResidualGenerator:
                 missing.add(name)
         if not np.all(np.isfinite(self.held_state)) or len(self.held_inputs) < 2:
             return None  # some input never seen yet: nothing can be predicted
-        state = self.held_state
+        state = self.held_state.copy()
+        state[FUEL_MASS] = self.fuel_filter.update(
+            state[FUEL_MASS], 0.0 if self.last_time_s is None else time_s - self.last_time_s)
         wind, self.wind_source = self.held_inputs["wind"], WIND_FILTERED
         if air_data_usable(air_data):
-            wind = wind_triangle_ned_mps(state[VELOCITY[:3]], *state[ATTITUDE], air_data)
+            wind = _air_data_wind(state, air_data, self.sensor_bias)
             self.wind_source = WIND_AIR_DATA
-        prediction = self._prediction(state, self.held_inputs["controls"], wind, time_s)
+        else:
+            air_data = None
+        prediction = self._prediction(state, self.held_inputs["controls"], wind, time_s,
+                                      air_data)
         velocity = state[VELOCITY]
         valid = self._update_row_validity(missing, time_s)
         if self.last_time_s is not None:
@@ -280,3 +313,9 @@ class ResidualGenerator:
             valid=valid.copy(),
             wind_source=self.wind_source,
         )
+
+
+def _air_data_wind(state: np.ndarray, air_data: np.ndarray, bias: SensorBias) -> np.ndarray:
+    """The wind [m/s, NED] of the wind triangle with measured air data less its bias."""
+    return wind_triangle_ned_mps(state[VELOCITY[:3]], *state[ATTITUDE],
+                                 true_air_data(air_data, bias))
