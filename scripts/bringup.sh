@@ -21,13 +21,17 @@ fi
 
 usage() {
     cat <<'EOF'
-usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DIR] [--foxglove]
+usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DIR]
+                         [--model-calibration FILE] [--foxglove]
 
   --ns NS          namespace of every node (-r __ns:=NS)
   --params FILE    a ROS parameter file given to every node (--params-file)
   --scenario FILE  the scenario sim_node flies (default: the shipped default scenario);
                    given again, another aircraft: vehicles /uav1, /uav2, ... (no --ns)
   --logs DIR       folder of the nodes' output (default: runs/bringup/logs)
+  --model-calibration FILE
+                   residual_node's models from scripts/calibrate_model.py's FILE, and
+                   mhe_node's noise from the noise file it names
   --foxglove       also start foxglove_node: every topic live in Foxglove (ws://127.0.0.1:8765)
 EOF
 }
@@ -38,6 +42,8 @@ params=""
 scenarios=()
 logs="$root/runs/bringup/logs"
 foxglove=""
+model_calibration=""
+noise_calibration=""
 STOP_TIMEOUT_S=5
 
 die() {
@@ -47,13 +53,15 @@ die() {
 
 while [ $# -gt 0 ]; do
     case "$1" in
-        --ns|--params|--scenario|--logs)
+        --ns|--params|--scenario|--logs|--model-calibration)
             if [ $# -lt 2 ] || [ -z "$2" ]; then die "$1 needs a value"; fi
             case "$1" in
                 --ns) ns="$2" ;;
                 --params) params="$(realpath -e -- "$2" 2>/dev/null)" || die "no parameter file '$2'" ;;
                 --scenario) scenarios+=("$(realpath -e -- "$2" 2>/dev/null)") || die "no scenario file '$2'" ;;
                 --logs) logs="$2" ;;
+                --model-calibration) model_calibration="$(realpath -e -- "$2" 2>/dev/null)" \
+                    || die "no model calibration file '$2'" ;;
             esac
             shift 2 ;;
         --foxglove) foxglove=1; shift ;;
@@ -74,6 +82,16 @@ fi
 "$root/scripts/setup.sh"
 # shellcheck disable=SC1091
 source "$root/scripts/env.sh"
+if [ -n "$model_calibration" ]; then
+    # checked here (one line, before any node starts); the noise file it names, if any
+    noise_calibration="$(python -c '
+import sys
+from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
+try:
+    print(load_model_calibration(sys.argv[1]).noise_file or "")
+except ModelCalibrationError as error:
+    sys.exit(f"bringup.sh: {error}")' "$model_calibration")" || exit 2
+fi
 mkdir -p "$logs"
 logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
@@ -101,6 +119,12 @@ start_node() {
     fi
     [ -n "$namespace" ] && ros_args+=(-r "__ns:=$namespace")
     [ -n "$params" ] && ros_args+=(--params-file "$params")
+    if [ -n "$model_calibration" ] && [ "$name" = residual_node ]; then
+        ros_args+=(-p "model_calibration_file:=$model_calibration")
+    fi
+    if [ -n "$model_calibration" ] && [ "$name" = mhe_node ] && [ -n "$noise_calibration" ]; then
+        ros_args+=(-p "noise_calibration_file:=$noise_calibration")
+    fi
     if [ "$name" = sim_node ] && [ ${#scenarios[@]} -gt 0 ]; then
         ros_args+=(-p "scenario:=${scenarios[$index]}")
     fi

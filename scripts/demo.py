@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The main job: fly a scenario through the nodes, record every topic, report.
 
-    scripts/demo.sh [SCENARIO.yaml ...] [--out DIR]
+    scripts/demo.sh [SCENARIO.yaml ...] [--out DIR] [--model-calibration MODEL.yaml]
 
 Starts recorder_node, mhe_node, residual_node, detector_node and sim_node as processes
 (the executables `ros2 run` starts) on a ROS domain of the run's own, flies the scenario
@@ -10,7 +10,9 @@ simulated seconds, stops every node it started, then writes metrics.json and the
 from the recording (scripts/report.py) and prints the metrics as a table. DIR (default
 runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures and logs/
 (each node's output, <node>.log). The scenario's `estimator:` mapping overrides mhe_node's
-parameters.
+parameters. --model-calibration (scripts/calibrate_model.py's file): residual_node's models
+are the calibrated aircraft (model_calibration_file), and mhe_node takes the noise
+calibration made on the same flights (noise_calibration_file) where the file names one.
 
 Several scenarios fly several aircraft in the one domain: vehicle k flies the k-th under
 the namespace /uavk with nodes of its own, the first simulator publishes /clock and the
@@ -58,6 +60,7 @@ from uav_common.ros_processes import (
     ros2_run_argv,
     stop_all,
 )
+from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
@@ -169,8 +172,15 @@ class Progress:
 class Demo:
     """One run: the node processes, their watch, and their stop."""
 
-    def __init__(self, vehicles: list[Vehicle], out: Path) -> None:
+    def __init__(self, vehicles: list[Vehicle], out: Path,
+                 model_calibration: Path | None = None) -> None:
         self.vehicles = vehicles
+        self.model_args = {"residual_node": [], "mhe_node": []}  # of a model calibration
+        if model_calibration is not None:
+            noise_file = load_model_calibration(model_calibration).noise_file
+            self.model_args = {
+                "residual_node": ["-p", f"model_calibration_file:={model_calibration}"],
+                "mhe_node": ["-p", f"noise_calibration_file:={noise_file}"] if noise_file else []}
         self.duration_s = vehicles[0].scenario.duration_s  # of every vehicle: one clock
         self.bag = out / "bag"
         self.logs = out / "logs"
@@ -263,8 +273,10 @@ class Demo:
                 f"recorder_node did not create {self.bag} in {STARTUP_TIMEOUT_S:g} s")
         for vehicle in self.vehicles:
             self.start(vehicle, "uav_fault_estimator", "mhe_node",
-                       ["--params-file", str(vehicle.mhe_params)] if vehicle.mhe_params else [])
-            self.start(vehicle, "uav_fault_estimator", "residual_node", [])
+                       (["--params-file", str(vehicle.mhe_params)] if vehicle.mhe_params else [])
+                       + self.model_args["mhe_node"])
+            self.start(vehicle, "uav_fault_estimator", "residual_node",
+                       self.model_args["residual_node"])
             self.start(vehicle, "uav_fault_estimator", "detector_node", [])
         # mhe_node and the recorder on residuals, the recorder and the demo on the estimates,
         # the recorder on the alarms: then nothing the nodes publish can be missed
@@ -405,6 +417,9 @@ def main() -> int:
                         "one aircraft each, under /uav1, /uav2, ...")
     parser.add_argument("--out", type=Path,
                         help="output directory (default: runs/<scenario name>[+<name>...]/)")
+    parser.add_argument("--model-calibration", type=Path, metavar="MODEL.yaml",
+                        help="the models' calibration (scripts/calibrate_model.py) for every "
+                        "vehicle")
     arguments = parser.parse_args()
     wall_started = time.monotonic()
     # Ctrl-C and SIGTERM: KeyboardInterrupt, whatever the caller left (an ignored SIGINT
@@ -417,7 +432,10 @@ def main() -> int:
                      map(load_scenario, arguments.scenarios or [default_scenario_path()])]
         overrides = [mhe_overrides(scenario) for scenario in scenarios]
         check_one_clock(scenarios)
-    except ScenarioError as error:
+        model_calibration = arguments.model_calibration and arguments.model_calibration.resolve()
+        if model_calibration:
+            load_model_calibration(model_calibration)  # refused here, before any process
+    except (ScenarioError, ModelCalibrationError) as error:
         print(f"demo: {' '.join(str(error).split())}", file=sys.stderr)  # one line
         return 2
     out = (arguments.out or REPO_ROOT / "runs" / "+".join(
@@ -446,7 +464,7 @@ def main() -> int:
         print(f"demo: {vehicle.namespace + ' flies ' if vehicle.namespace else ''}scenario "
               f"'{vehicle.scenario.name}' ({vehicle.scenario.path})", flush=True)
     print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
-    demo = Demo(vehicles, out)
+    demo = Demo(vehicles, out, model_calibration)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
         received = demo.fly()

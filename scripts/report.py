@@ -42,6 +42,7 @@ def write_report(bag: Path, out: Path, scenario: str,
     run = report.run_from(messages, bag)
     run = dataclasses.replace(
         run, cpu_s=report.node_cpu_s(statuses, namespace),
+        aircraft=report.aircraft(statuses, namespace),
         estimates=dataclasses.replace(
             run.estimates, solver_method=report.solver_method(statuses, namespace)))
     metrics = report.run_metrics(run, scenario)

@@ -19,6 +19,7 @@ from helpers.process_table import kill_all, nodes_logging_under
 from helpers.repo import SCRIPTS
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.ros_processes import RosProcess, wait_until
+from uav_fault_estimator.estimation.model_file import SHIPPED_MODEL
 from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.recording.project_bag import project_typestore, read_topics
 from uav_fault_estimator.reporting import report
@@ -37,7 +38,7 @@ TWO_FAULTS = [
 FIGURES = ["states.png", "track.png", "wind.png", "residuals.png", "sensitivity.png",
            "estimates.png", "alarms.png"]
 METRICS_KEYS = {"scenario", "duration_s", "settle_s", "detection_threshold_pct", "faults",
-                "false_alarms", "solver", "pipeline", "alarms"}
+                "false_alarms", "solver", "pipeline", "alarms", "aircraft"}
 FAULT_KEYS = {"seeded", "seeded_final_pct", "estimate_final_pct", "rmse_pct",
               "max_abs_error_pct", "detection_delay_s"}
 SOLVER_KEYS = {"name", "solves", "median_ms", "p99_ms", "max_ms", "cpu_median_ms", "cpu_p99_ms",
@@ -84,6 +85,9 @@ def check_metrics(out: Path) -> dict:
     pipeline = metrics["pipeline"]
     assert pipeline["messages_received"] == pipeline["messages_expected"] == EXPECTED_ESTIMATES
     assert metrics["solver"]["failures"] == 0
+    # what flew and what the models were, from sim_node's and residual_node's /diagnostics
+    assert isinstance(metrics["aircraft"]["flown"], dict)
+    assert metrics["aircraft"]["model"] == SHIPPED_MODEL
     for name in FIGURES:
         assert (out / name).stat().st_size > 10_000, name
     for node in ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node"):

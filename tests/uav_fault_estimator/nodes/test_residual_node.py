@@ -7,6 +7,7 @@ import subprocess
 
 import numpy as np
 import pytest
+import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_seconds
@@ -111,3 +112,18 @@ def test_an_unknown_fault_name_ends_residual_node_with_one_message():
     assert result.returncode == 2  # bad input
     assert "Traceback" not in result.stderr
     assert "residual_node: unknown fault names ['wing_fell_off']" in result.stderr
+
+
+@pytest.mark.timeout(60)
+def test_a_calibration_of_another_model_ends_residual_node_with_one_message(tmp_path):
+    calibration = tmp_path / "model.yaml"
+    calibration.write_text(yaml.safe_dump({"model_file": "aerosonde.xml", "model_sha256": "0" * 64,
+                                           "aircraft": {}}))
+    result = subprocess.run(
+        ros2_run_argv("uav_fault_estimator", "residual_node",
+                      ros_args=["-p", f"model_calibration_file:={calibration}"]),
+        capture_output=True, text=True, timeout=50,
+    )
+    assert result.returncode == 2  # bad input
+    assert "Traceback" not in result.stderr
+    assert f"model calibration {calibration}: made for another model file" in result.stderr

@@ -21,6 +21,7 @@ from uav_fault_estimator.recording.project_bag import (
 )
 from uav_fault_estimator.reporting import report
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
+from uav_sim.flown_aircraft import FlownAircraft, SensorBias
 
 REPORT = SCRIPTS / "report.py"
 ESTIMATES = 200
@@ -183,3 +184,24 @@ def test_the_table_of_a_flight_shorter_than_settling_shows_no_figures():
     lines = report.table(metrics).splitlines()
     assert lines[2].split() == ["right_wing_lift_loss", "yes", "1.00", "1.00", "-", "-", "-"]
     assert lines[1].index("delay s") + len("delay s") == len(lines[2])  # still aligned
+
+
+@pytest.mark.timeout(30)
+def test_the_table_says_what_flew_and_what_the_models_were():
+    """sim_node's flown aircraft (where it differs from the model) and residual_node's
+    model on one line of the table."""
+    flown = FlownAircraft(mass_scale=1.04, coefficients=(("CDmin", 1.1),),
+                          sensor_bias=SensorBias(angle_of_attack_deg=0.5))
+    assert flown.differences() == {"mass_scale": 1.04, "coefficients": {"CDmin": 1.1},
+                                   "sensor_bias": {"angle_of_attack_deg": 0.5}}
+    assert FlownAircraft().differences() == {}
+    stamps = np.arange(1, 61) * 0.5
+    names = ["right_wing_lift_loss"]
+    run = report.Run(
+        estimates=EstimateSeries(names, stamps, np.zeros((60, 1)), np.zeros(60, dtype=int),
+                                 np.full(60, 0.4)),
+        seeded=SeededSeries(names, stamps, np.zeros((60, 1))), duration_s=30.0, wall_s=1.0,
+        aircraft={"flown": flown.differences(), "model": "runs/model.yaml"})
+    table = report.table(report.run_metrics(run, "flown", update_period_s=0.5))
+    assert ("flown aircraft: mass_scale 1.04, CDmin 1.1, angle_of_attack_deg 0.5; models: "
+            "runs/model.yaml") in table.splitlines()

@@ -19,6 +19,7 @@ import yaml
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
 from uav_common.package_data import default_parameters
 from uav_common.sample_grid import on_grid
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
@@ -28,6 +29,7 @@ from uav_fault_estimator.estimation.estimator_config import (
     suite_noise,
 )
 from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.model_calibration import SensorFlight
 from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
@@ -41,6 +43,7 @@ def fly_and_estimate(
     residual_overrides: Mapping[str, Any] | None = None,
     mhe_overrides: Mapping[str, Any] | None = None,
     true_wind: bool = False,
+    model: FlownAircraft = NOMINAL,
 ) -> tuple[EstimateSeries, SeededSeries]:
     """Fly the scenario and estimate its faults every update_period_s [s] of sim time.
 
@@ -50,13 +53,14 @@ def fly_and_estimate(
     at the same stamps. The models fly the air data where the aircraft has it, as
     residual_node does. true_wind: the models get the true wind (background and
     turbulence) instead, which no aircraft has: a bound on what better wind knowledge
-    could give.
+    could give. model: the aircraft the models evaluate (a model calibration's), as
+    residual_node's model_calibration_file gives it.
     """
     residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
                 **(residual_overrides or {})}
     mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), **scenario.estimator,
            **(mhe_overrides or {})}
-    generator = residual_generator(residual)
+    generator = residual_generator(residual, model)
     estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
     noise = suite_noise(mhe, residual["tau_a_s"])
     published = list(mhe["fault_names"])
@@ -131,6 +135,22 @@ def fly_on_grid_each(scenarios: Sequence[Scenario],
                      period_s: float) -> list[tuple[np.ndarray, ...]]:
     """fly_on_grid of every scenario, one process per core (each_in_processes)."""
     return each_in_processes(functools.partial(fly_on_grid, period_s=period_s), scenarios)
+
+
+def sensor_flight(scenario: Scenario) -> SensorFlight:
+    """The scenario's samples at the sensor rate as a recording of them gives them (what a
+    model calibration reads)."""
+    simulation = Simulation(scenario)
+    samples = [simulation.sample()]
+    while not simulation.finished:
+        samples.append(simulation.step())
+    return SensorFlight(
+        f"scenario '{scenario.name}' seed {scenario.seed}",
+        np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
+        np.array([s.controls for s in samples]),
+        np.array([s.wind_filtered_ned_mps for s in samples]),
+        np.array([np.full(3, math.nan) if s.air_data is None else s.air_data
+                  for s in samples]))
 
 
 def fault_free_residuals(scenario: Scenario) -> np.ndarray:

@@ -33,6 +33,7 @@ SCALE_RANGE = (0.5, 2.0)  # what a scale may be: a model this far off is another
 BIAS_LIMIT_DEG = 5.0  # the largest vane bias [deg]
 CG_OFFSET_LIMIT_M = 0.1  # the largest CG offset per axis [m] (chord 0.19 m)
 MODEL = "aerosonde"
+DIAGNOSTIC_KEY = "flown_aircraft"  # sim_node's /diagnostics key: differences() as JSON
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,19 @@ class FlownAircraft:
                 "sensor_bias": {"airspeed_scale": self.sensor_bias.airspeed_scale,
                                 "angle_of_attack_deg": self.sensor_bias.angle_of_attack_deg,
                                 "sideslip_deg": self.sensor_bias.sideslip_deg}}
+
+    def differences(self) -> dict:
+        """to_dict's entries where the aircraft is not the model ({}: it is the model)."""
+        nominal = FlownAircraft().to_dict()
+        entries = {key: value for key, value in self.to_dict().items()
+                   if key not in ("coefficients", "sensor_bias") and value != nominal[key]}
+        if self.coefficients:
+            entries["coefficients"] = dict(self.coefficients)
+        bias = {key: value for key, value in self.to_dict()["sensor_bias"].items()
+                if value != nominal["sensor_bias"][key]}
+        if bias:
+            entries["sensor_bias"] = bias
+        return entries
 
 
 NOMINAL = FlownAircraft()

@@ -178,7 +178,9 @@ def _triple(reader: Reader, name: str, low: float, high: float) -> tuple[float, 
     return tuple(float(value) for value in values)
 
 
-def _aircraft(reader: Reader) -> FlownAircraft:
+def read_aircraft(reader: Reader) -> FlownAircraft:
+    """An `aircraft:` block (a scenario's flown aircraft, a model calibration's model),
+    strictly: unknown keys and names refused, scales and biases within their limits."""
     reader.check_keys(set(), {"mass_scale", "inertia_scale", "cg_offset_m", "thrust_scale",
                               "coefficients", "sensor_bias"})
     data = reader.data
@@ -288,7 +290,7 @@ def load_scenario(path: str | Path) -> Scenario:
         waypoints_ne_m=_waypoints(reader),
         wind=_wind(reader.child("wind")),
         sensors=sensors,
-        aircraft=_aircraft(reader.child("aircraft")) if "aircraft" in data else NOMINAL,
+        aircraft=read_aircraft(reader.child("aircraft")) if "aircraft" in data else NOMINAL,
         faults=tuple(
             _fault(reader.element("faults", index))
             for index in range(len(reader.items("faults")))

@@ -225,7 +225,8 @@ class Diagnostics:
 
     Wall time, not simulation time: health is for the people and tools watching the run.
     A node driven by inputs (stale_after_s given) says STALE, with its last status's values,
-    once it has had no update for that long.
+    once it has had no update for that long. A node may add statuses of its own parts
+    (update_part: `<node>/<part>`, e.g. mhe_node's model_fit), published with its own.
     """
 
     def __init__(self, node: Node, period_s: float = 1.0,
@@ -236,6 +237,7 @@ class Diagnostics:
             level=OK, name=node.get_fully_qualified_name(), message="starting",
             hardware_id=hardware_id(node.get_namespace()),
         )
+        self._parts: dict[str, DiagnosticStatus] = {}
         self._stale_after_s = stale_after_s
         self._updated_s = time.monotonic()
         node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -247,6 +249,13 @@ class Diagnostics:
         self._status.values = [KeyValue(key=key, value=str(value)) for key, value in values.items()]
         self._updated_s = time.monotonic()
 
+    def update_part(self, part: str, level: bytes, message: str, values: dict[str, Any]) -> None:
+        """Set the status of one of the node's parts (named `<node>/<part>`)."""
+        self._parts[part] = DiagnosticStatus(
+            level=level, name=f"{self._status.name}/{part}", message=message,
+            hardware_id=self._status.hardware_id,
+            values=[KeyValue(key=key, value=str(value)) for key, value in values.items()])
+
     def publish(self) -> None:
         status, silent_s = self._status, time.monotonic() - self._updated_s
         level, message = status.level, status.message
@@ -255,7 +264,7 @@ class Diagnostics:
         published = DiagnosticStatus(
             level=level, name=status.name, hardware_id=status.hardware_id, message=message,
             values=[*status.values, KeyValue(key=CPU_KEY, value=f"{time.process_time():.3f}")])
-        array = DiagnosticArray(status=[published])
+        array = DiagnosticArray(status=[published, *self._parts.values()])
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)
 

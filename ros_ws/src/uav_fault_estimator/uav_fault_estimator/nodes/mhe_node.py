@@ -1,7 +1,8 @@
 """mhe_node: moving-horizon MAP fault estimates from the residual stream.
 
 Subscribes `residuals` (Residuals); publishes `faults/estimate` (FaultEstimate) on every
-residual, stamped with the residual's stamp, and solver figures on `/diagnostics`.
+residual, stamped with the residual's stamp, and solver figures on `/diagnostics`, with the
+model's health as a status of its own, `mhe_node/model_fit` (estimation/model_fit.py).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from uav_fault_estimator.estimation.mhe import (
     MovingHorizonEstimator,
     missing_samples,
 )
+from uav_fault_estimator.estimation.model_fit import DOES_NOT_FIT, ModelFit
 from uav_fault_estimator.estimation.noise_model import SUITES
 from uav_fault_estimator.estimation.saved_estimate import (
     SavedEstimate,
@@ -51,6 +53,7 @@ from uav_fault_estimator.estimation.saved_estimate import (
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 from uav_fault_estimator.nodes.matched_streams import guarded
 from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
+from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT, SETTLE_S
 
 # Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
 # it; variances and scales positive where the estimator divides by them; the horizon at
@@ -101,6 +104,12 @@ PARAMETERS = {
     "update_budget_ms": ParameterSpec(
         "an update longer than this drops the window's oldest sample beyond "
         f"{SUSPECT_SIGMAS:g} noise deviations [ms]", 0.01, 60000.0, live=True),
+    "model_fit_window_s": ParameterSpec(
+        "the model_fit status judges the fault-free residuals of this much sim time [s]",
+        5.0, 3600.0),
+    "model_fit_threshold_sigmas": ParameterSpec(
+        "model_fit says 'does not fit' when a residual's window mean is beyond this many of "
+        "its deviations", 0.5, 1000.0),
     "state_file": ParameterSpec(
         "file for the last estimate: a restart within the flight (a first residual later "
         "than the saved one) starts from it; empty: none"),
@@ -126,6 +135,8 @@ class MheNode(Node):
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", STREAM_QOS)
         self.create_subscription(Residuals, "residuals", self.on_residuals, STREAM_QOS)
         self.diagnostics = Diagnostics(self)
+        self.model_fit = ModelFit(self.noise.calibration, self.parameters["model_fit_window_s"],
+                                  self.parameters["model_fit_threshold_sigmas"], SETTLE_S)
         self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
@@ -157,6 +168,7 @@ class MheNode(Node):
         if verdict is StampVerdict.RESTART:
             self.estimator.reset()
             self.noise.reset()
+            self.model_fit.reset()
             self.window_stamps_s.clear()
             self.counts["stamp_resets"] += 1
         if verdict is StampVerdict.GAP:
@@ -215,9 +227,20 @@ class MheNode(Node):
         estimate = self.estimate_message(time_s, result)
         self.publisher.publish(estimate)
         self.count(result)
+        self.judge_fit(time_s, message, estimate)
         if self.state_file is not None:
             self.save(SavedEstimate(stamp_nanoseconds(message.header.stamp), tuple(self.names),
                                     tuple(estimate.values_pct)))
+
+    def judge_fit(self, time_s: float, message: Residuals, estimate: FaultEstimate) -> None:
+        """The model_fit status from the residual while no fault is reported."""
+        verdict = self.model_fit.update(
+            time_s, np.array(message.residual), np.array(message.valid), message.wind_source,
+            max(estimate.values_pct, default=0.0) >= DETECTION_THRESHOLD_PCT)
+        self.diagnostics.update_part(
+            "model_fit", WARN if verdict.verdict == DOES_NOT_FIT else OK, verdict.text,
+            {"verdict": verdict.verdict, "largest_mean_sigmas": f"{verdict.largest_sigmas:.2f}",
+             "channel": verdict.channel, "window_samples": verdict.samples})
 
     def save(self, estimate: SavedEstimate) -> None:
         """Keep the estimate in the state file; a file that cannot be written is said once

@@ -3,7 +3,10 @@
 Subscribes `state`, `controls`, `wind/filtered` and, where the aircraft has it, `air_data`
 (matched by stamp); publishes `residuals` (Residuals) every update_period_s of sim time, and
 `/diagnostics`. The models fly the air data when a sample has usable air data and the
-filtered wind otherwise (residuals.py); a fallback is a WARN on /diagnostics.
+filtered wind otherwise (residuals.py); a fallback is a WARN on /diagnostics. With a
+model_calibration_file (scripts/calibrate_model.py) the models are the calibrated aircraft
+and the calibration's air-data bias is taken out of the air data; a file made for another
+aerosonde.xml is refused at start (one line, exit status 2).
 """
 
 from __future__ import annotations
@@ -32,7 +35,13 @@ from uav_sim.envelope import (
     WIND_LIMITS,
     state_rate_gate,
 )
+from uav_sim.flown_aircraft import NOMINAL
 
+from uav_fault_estimator.estimation.model_file import (
+    MODEL_KEY,
+    SHIPPED_MODEL,
+    load_model_calibration,
+)
 from uav_fault_estimator.estimation.prediction import residual_generator
 from uav_fault_estimator.estimation.residuals import (
     RESIDUAL_CHANNELS,
@@ -55,6 +64,8 @@ PARAMETERS = {
         "rows stay invalid this long after a missing channel is back [s]", 0.0, 600.0),
     "wind_error_step_mps": ParameterSpec(
         "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 10.0),
+    "model_calibration_file": ParameterSpec(
+        "model calibration YAML (scripts/calibrate_model.py); empty: aerosonde.xml as shipped"),
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
@@ -74,7 +85,10 @@ class ResidualNode(Node):
         p = self.parameters
         if not p["update_period_s"] > 0:
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
-        self.generator = residual_generator(p)
+        calibration = p["model_calibration_file"]
+        self.model = calibration or SHIPPED_MODEL
+        self.generator = residual_generator(
+            p, load_model_calibration(calibration).aircraft if calibration else NOMINAL)
         self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset",
                                       OPTIONAL_STREAMS)
@@ -139,6 +153,7 @@ class ResidualNode(Node):
             "late_optional_messages": self.streams.late_optional,
             "implausible_values": self.streams.implausible_values,
             "model_rebuilds": self.generator.model_rebuilds,
+            MODEL_KEY: self.model,
             "core_ms_per_sample": f"{1e3 * self.core_time_s / max(self.counts['samples'], 1):.3f}",
         }
 

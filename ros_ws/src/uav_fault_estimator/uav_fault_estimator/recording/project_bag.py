@@ -21,9 +21,18 @@ from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
-from uav_common.message_fields import controls_array, stamp_nanoseconds, stamp_seconds, state_array
+from uav_common.message_fields import (
+    air_data_array,
+    controls_array,
+    stamp_nanoseconds,
+    stamp_seconds,
+    state_array,
+    wind_array,
+)
 from uav_common.package_data import share_dir
 from uav_common.sample_grid import on_grid
+
+from uav_fault_estimator.estimation.model_calibration import SensorFlight
 
 MESSAGE_PACKAGES = ("uav_fault_msgs",)  # the project's own message types
 
@@ -170,3 +179,41 @@ def flight_from_recording(bag: Path, typestore: Typestore,
             states.append(state_array(message))
             inputs.append(controls_array(controls[stamp_ns]))
     return np.array(times), np.array(states), np.array(inputs)
+
+
+def sensor_flight_from_recording(bag: Path, typestore: Typestore) -> SensorFlight:
+    """A recorded fault-free flight at the sensor rate, as a model calibration reads it:
+    /state, /controls and /wind/filtered matched by stamp, with /air_data where recorded
+    (NaN rows where not). RecordingError naming the bag when one of the three streams is
+    missing, when they share no stamp, or when /faults/seeded has a fault seeded in it."""
+    messages = read_topics(bag, typestore,
+                           ("/state", "/controls", "/wind/filtered", "/air_data", "/faults/seeded"))
+    by_stamp = {topic: {stamp_nanoseconds(m.header.stamp): m for m in messages[topic]}
+                for topic in ("/controls", "/wind/filtered", "/air_data")}
+    for topic in ("/state", "/controls", "/wind/filtered"):
+        if not messages[topic]:
+            raise RecordingError(f"recording {bag}: no {topic} recorded (a calibration needs "
+                                 "/state, /controls and /wind/filtered)")
+    for message in messages["/faults/seeded"]:
+        seeded = [name for name, value in zip(message.names, message.values_pct, strict=True)
+                  if value != 0.0]
+        if seeded:
+            raise RecordingError(
+                f"recording {bag}: not a fault-free flight ({', '.join(seeded)} seeded at "
+                f"{stamp_seconds(message.header.stamp):g} s)")
+    rows = []
+    for message in messages["/state"]:
+        stamp_ns = stamp_nanoseconds(message.header.stamp)
+        controls = by_stamp["/controls"].get(stamp_ns)
+        wind = by_stamp["/wind/filtered"].get(stamp_ns)
+        if controls is None or wind is None:
+            continue
+        air_data = by_stamp["/air_data"].get(stamp_ns)
+        rows.append((stamp_seconds(message.header.stamp), state_array(message),
+                     controls_array(controls), wind_array(wind),
+                     np.full(3, np.nan) if air_data is None else air_data_array(air_data)))
+    if not rows:
+        raise RecordingError(f"recording {bag}: /state, /controls and /wind/filtered share "
+                             "no stamp")
+    times, states, inputs, winds, air_data = (np.array(c) for c in zip(*rows, strict=True))
+    return SensorFlight(str(bag), times, states, inputs, winds, air_data)

@@ -3,6 +3,7 @@ No ROS here: metrics.py computes the figures."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,8 +12,10 @@ import numpy as np
 from uav_common.health import CPU_KEY, hardware_id
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
+from uav_sim.flown_aircraft import DIAGNOSTIC_KEY as FLOWN_AIRCRAFT_KEY
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
+from uav_fault_estimator.estimation.model_file import MODEL_KEY
 from uav_fault_estimator.recording.project_bag import WALL_S, RecordingError
 from uav_fault_estimator.reporting.metrics import (
     DETECTION_THRESHOLD_PCT,
@@ -48,6 +51,7 @@ class Run:
     wall_s: float
     alarms: AlarmSeries | None = None
     cpu_s: Mapping[str, float] | None = None  # each node's CPU time over the run [s]
+    aircraft: Mapping[str, object] | None = None  # report.aircraft: what flew, the models
 
 
 def run_from(messages: dict[str, list], bag: Path) -> Run:
@@ -108,11 +112,25 @@ def node_cpu_s(diagnostics: list, namespace: str = "") -> dict[str, float]:
 def solver_method(diagnostics: list, namespace: str = "") -> str | None:
     """The solver method mhe_node in namespace reported on /diagnostics (its last status's
     estimator_config.SOLVER_METHOD_KEY); None when it reported none."""
-    method = None
+    return last_value(diagnostics, namespace, "mhe_node", SOLVER_METHOD_KEY)
+
+
+def aircraft(diagnostics: list, namespace: str = "") -> dict:
+    """What flew and what the models were: sim_node's flown aircraft (where it differs from
+    the model; {} the model itself) and residual_node's model; None where a node did not
+    say (a recording of a real flight, or of an older run)."""
+    flown = last_value(diagnostics, namespace, "sim_node", FLOWN_AIRCRAFT_KEY)
+    return {"flown": None if flown is None else json.loads(flown),
+            "model": last_value(diagnostics, namespace, "residual_node", MODEL_KEY)}
+
+
+def last_value(diagnostics: list, namespace: str, node: str, key: str) -> str | None:
+    """The value of key on the last /diagnostics status of node (in namespace) that had it."""
+    value = None
     for name, values in _node_statuses(diagnostics, namespace):
-        if name == "mhe_node":
-            method = values.get(SOLVER_METHOD_KEY, method)
-    return method
+        if name == node:
+            value = values.get(key, value)
+    return value
 
 
 def _node_statuses(diagnostics: list, namespace: str) -> Iterator[tuple[str, dict[str, str]]]:
@@ -151,6 +169,7 @@ def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
                 name: round(cpu_s / run.duration_s, 4) for name, cpu_s in run.cpu_s.items()},
         },
         "alarms": alarm_metrics(run.alarms, run.seeded) if run.alarms else None,
+        "aircraft": dict(run.aircraft) if run.aircraft else None,
     }
 
 
@@ -186,6 +205,10 @@ def table(metrics: dict) -> str:
     if pipeline["cpu_s_per_sim_s"]:
         lines.append("CPU per simulated second [s]: " + ", ".join(
             f"{name} {cpu:.3f}" for name, cpu in pipeline["cpu_s_per_sim_s"].items()))
+    flown = (metrics.get("aircraft") or {})
+    if flown.get("flown") is not None:
+        lines.append(f"flown aircraft: {_aircraft_text(flown['flown'])}; models: "
+                     f"{flown['model'] or 'not said'}")
     alarms = metrics.get("alarms")
     if alarms:
         lines.append(f"detector: P_FA {alarms['false_alarm_probability']:g} per sample; "
@@ -194,6 +217,19 @@ def table(metrics: dict) -> str:
                   f"after the fault {_seconds(test['first_alarm_delay_s'])}"
                   for name, test in alarms["tests"].items()]
     return "\n".join(lines)
+
+
+def _aircraft_text(differences: dict) -> str:
+    """A flown aircraft's differences from the model on one line ("the model itself")."""
+    if not differences:
+        return "the model itself"
+    parts = []
+    for key, value in differences.items():
+        if isinstance(value, dict):
+            parts += [f"{name} {item:g}" for name, item in value.items()]
+        else:
+            parts.append(f"{key} {value}")
+    return ", ".join(parts)
 
 
 def _figure(value: float | None, width: int, spec: str = ".2f") -> str:

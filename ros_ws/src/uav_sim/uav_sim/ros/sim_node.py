@@ -8,12 +8,15 @@ nodes with use_sim_time) and `/diagnostics`. Run with use_sim_time, it follows t
 `/clock` instead of publishing it (a second vehicle in the same domain): each step waits
 until the clock has reached its time, so every vehicle flies on the one clock. Measurements
 go through the sensor model (uav_sim.sensors) unless the scenario says `sensors: {noise:
-false}`. Ends by itself at the scenario's end, with exit status 0; a bad scenario or parameter
-ends it before it starts, status 2.
+false}`. Its /diagnostics say how the flown aircraft differs from the model
+(`flown_aircraft`: JSON of the scenario's aircraft block where it differs, {} for the model
+itself), so that a recording keeps what was flown. Ends by itself at the scenario's end, with
+exit status 0; a bad scenario or parameter ends it before it starts, status 2.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 import time
@@ -47,6 +50,7 @@ from uav_common.ros.paced_publishing import PacedPublishers
 from uav_common.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 
+from uav_sim.flown_aircraft import DIAGNOSTIC_KEY
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 
@@ -97,6 +101,7 @@ class SimNode(Node):
         self.clock_publisher = (None if self.follows_clock else
                                 self.create_publisher(Clock, "/clock", CLOCK_QOS))
         self.diagnostics = Diagnostics(self, stale_after_s=None)  # a source: no inputs
+        self.flown_aircraft = json.dumps(self.scenario.aircraft.differences())  # {}: the model
         self.get_logger().info(
             f"scenario '{self.scenario.name}' from {scenario_path}: {self.scenario.duration_s:g} s "
             f"at {self.parameters['sensor_rate_hz']:g} Hz, "
@@ -180,6 +185,7 @@ class SimNode(Node):
             "sim_time_s": f"{sample.time_s:.2f}",
             "real_time_factor": f"{sample.time_s / wall_s:.1f}" if wall_s > 0 else "-",
             "scenario": self.scenario.name,
+            DIAGNOSTIC_KEY: self.flown_aircraft,
             "missing_channels": ",".join(missing) or "none",
         }
         if missing:

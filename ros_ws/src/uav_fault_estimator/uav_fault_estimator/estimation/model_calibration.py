@@ -1,0 +1,264 @@
+"""Model calibration: the prediction model's constant parameters from fault-free flights.
+
+The faults' batch estimation with the model's parameters (model_parameters.py) in place of
+the faults. Per flight, the residual generator runs the models as residual_node does (the
+filtered residuals y and sensitivities S by secant differences of model copies, every
+update_period_s), its columns the parameters: y ~= S d for a change d of the parameters
+from the current model. Gauss-Newton on the pooled flights, each step a bounded least
+squares on ProxSuite,
+
+    min_d  sum_k ||y_k - S_k d||^2_W + ||theta + d||^2_P    s.t. lower <= theta + d <= upper
+
+with W the fault-free noise per residual channel (NoiseCalibration, the air-data suite), each
+sample weighted by its AR(1) white equivalent (1 - rho) / (1 + rho) (rho the one-step
+correlation after F_a: samples 0.5 s apart are not independent), and P the prior toward the
+nominal model (ModelParameter.prior_std). After the last step the posterior covariance
+(sum S^T W S + P)^-1 is inflated by the fit's reduced chi-square where it exceeds 1 (what the
+model still misses), and its correlations say which parameters the flights cannot separate.
+No ROS here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from proxsuite import proxqp
+from uav_common.sample_grid import on_grid
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, aircraft_file
+from uav_sim.propeller import Propeller
+
+from uav_fault_estimator.estimation.model_parameters import (
+    ModelParameter,
+    changed,
+    model_parameter,
+    values_of,
+)
+from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration
+from uav_fault_estimator.estimation.prediction import AircraftPredictor
+from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
+from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, ResidualGenerator
+
+MAX_STEPS = 6  # Gauss-Newton steps at most
+CONVERGED_SIGMAS = 0.05  # a step below this many posterior deviations in each parameter ends it
+WORST_CORRELATIONS = 5  # pairs printed and written
+
+
+@dataclass(frozen=True)
+class SensorFlight:
+    """A recorded flight at the sensor rate: times (K,) [s], states (K, 14), controls (K, 7),
+    filtered wind (K, 3) [m/s NED] and air data (K, 3) (NaN rows without), in
+    uav_common.channels order; name says where it came from."""
+
+    name: str
+    times_s: np.ndarray
+    states: np.ndarray
+    controls: np.ndarray
+    winds_ned_mps: np.ndarray
+    air_data: np.ndarray
+
+
+@dataclass(frozen=True)
+class FlightTerms:
+    """One flight's normal equations at the current model: G (n, n) and h (n,) of
+    sum_k S_k^T W S_k and S_k^T W y_k, the weighted squared residual sum and its rows, and the
+    residuals (K, 6) per noise suite for the noise calibration."""
+
+    gram: np.ndarray
+    linear: np.ndarray
+    chi_square: float
+    rows: int
+    residuals: dict[str, np.ndarray]
+
+
+def model_file_sha256() -> str:
+    """The shipped aerosonde.xml's SHA-256: a calibration is valid for this file only."""
+    return hashlib.sha256(aircraft_file().read_bytes()).hexdigest()
+
+
+def residual_weights(noise: NoiseCalibration) -> np.ndarray:
+    """W (6,) [1 / residual unit²]: the air-data suite's inverse variances, each times its
+    AR(1) white equivalent (1 - rho) / (1 + rho)."""
+    suite = SUITES[WIND_AIR_DATA]
+    rho = np.clip(noise.correlations[suite], 0.0, 0.99)
+    return (1.0 - rho) / (1.0 + rho) / noise.variances[suite]
+
+
+def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str],
+                 residual_parameters: Mapping[str, Any], weights: np.ndarray) -> FlightTerms:
+    """Run the flight through a residual generator whose models are `model` and whose columns
+    are the named parameters' sensitivities [residual unit per parameter unit]; its normal
+    equations on residual_node's update grid (rows valid and plausible only), and the
+    residuals of the model itself, flying the air data and the filtered wind."""
+    parameters = [model_parameter(name) for name in names]
+    generator = _generator(model, parameters, residual_parameters)
+    period_s = float(residual_parameters["update_period_s"])
+    n = len(parameters)
+    gram, linear, chi_square, rows = np.zeros((n, n)), np.zeros(n), 0.0, 0
+    order = [generator.column_names.index(p.name) for p in parameters]
+    per_unit = np.array([_column_per_unit(p) for p in parameters])
+    air_data_rows = []
+    for k, time_s in enumerate(flight.times_s):
+        sample = generator.update(time_s, flight.states[k], flight.controls[k],
+                                  flight.winds_ned_mps[k], flight.air_data[k])
+        if sample is None or not on_grid(time_s, period_s) or not sample.valid.all():
+            continue
+        term = sample_normal_equations(sample.residual, sample.sensitivity[:, order] * per_unit,
+                                       sample.valid, weights, n)
+        gram += term.gram
+        linear += term.linear
+        chi_square += float(term.whitened_y @ term.whitened_y)
+        rows += int(np.count_nonzero(term.whitened_y))
+        if sample.wind_source == WIND_AIR_DATA:
+            air_data_rows.append(sample.residual)
+    residuals = {SUITES[WIND_AIR_DATA]: np.array(air_data_rows).reshape(-1, 6),
+                 "filtered_wind": _filtered_wind_residuals(flight, model, residual_parameters)}
+    return FlightTerms(gram, linear, chi_square, rows, residuals)
+
+
+def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
+               residual_parameters: Mapping[str, Any]) -> ResidualGenerator:
+    """residual_node's generator with `model`'s copies, columns per parameter: a model copy
+    moved by the parameter's step, or for an air-data bias the bias moved by it."""
+    propeller = Propeller.from_aircraft()
+    p = residual_parameters
+    copies = [q.name for q in parameters if not q.is_bias]
+    # one secant step for the copies: every scale's is the same
+    step_pct = parameters[0].step if copies else 1.0
+    return ResidualGenerator(
+        lambda changes: AircraftPredictor({}, propeller, changed(model, changes)),
+        copies, step_pct, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
+        sensor_bias=model.sensor_bias,
+        bias_steps={q.name: _bias_step(q) for q in parameters if q.is_bias})
+
+
+def _bias_step(parameter: ModelParameter) -> float:
+    """The secant step in SensorBias's own unit (a scale, or degrees)."""
+    return parameter.step / 100.0 if parameter.unit == "%" else parameter.step
+
+
+def _column_per_unit(parameter: ModelParameter) -> float:
+    """What turns the generator's column into one per parameter unit: a bias's column is per
+    SensorBias unit (per unit scale, or per degree)."""
+    return 0.01 if parameter.is_bias and parameter.unit == "%" else 1.0
+
+
+def _filtered_wind_residuals(flight: SensorFlight, model: FlownAircraft,
+                             residual_parameters: Mapping[str, Any]) -> np.ndarray:
+    """The model's residuals (K, 6) on the update grid flying the filtered wind only: the
+    other suite's noise, from the same flights."""
+    generator = _generator(model, (), residual_parameters)
+    period_s = float(residual_parameters["update_period_s"])
+    rows = []
+    for k, time_s in enumerate(flight.times_s):
+        sample = generator.update(time_s, flight.states[k], flight.controls[k],
+                                  flight.winds_ned_mps[k], None)
+        if sample is not None and on_grid(time_s, period_s) and sample.valid.all():
+            rows.append(sample.residual)
+    return np.array(rows).reshape(-1, 6)
+
+
+@dataclass(frozen=True)
+class ModelCalibration:
+    """A calibrated model: the aircraft its copies load, and per parameter (names order) its
+    unit, value, prior deviation and posterior deviation [its unit], the posterior correlations
+    (n, n), the Gauss-Newton steps taken, the fit's reduced chi-square, and the residuals per
+    suite and flight at the calibrated model (for the noise calibration)."""
+
+    aircraft: FlownAircraft
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    values: np.ndarray
+    prior_std: np.ndarray
+    posterior_std: np.ndarray
+    correlations: np.ndarray
+    steps: int
+    reduced_chi_square: float
+    residuals: dict[str, list[np.ndarray]]
+
+    def worst_correlations(self, count: int = WORST_CORRELATIONS) -> list[tuple[str, str, float]]:
+        """The most correlated parameter pairs, largest |correlation| first."""
+        n = len(self.names)
+        pairs = [(self.names[i], self.names[j], float(self.correlations[i, j]))
+                 for i in range(n) for j in range(i + 1, n)]
+        return sorted(pairs, key=lambda pair: -abs(pair[2]))[:count]
+
+
+MapFlights = Callable[[Callable, Iterable], Iterable]
+
+
+def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
+              residual_parameters: Mapping[str, Any], noise: NoiseCalibration,
+              map_flights: MapFlights = map, log: Callable[[str], None] = print,
+              ) -> ModelCalibration:
+    """Identify the named parameters from the flights (the module docstring's problem).
+    map_flights(function, flights) runs a function on every flight (a process pool's map,
+    or map); log receives one line per step."""
+    parameters = [model_parameter(name) for name in names]
+    names = tuple(names)
+    prior_inverse = np.diag([1.0 / p.prior_std**2 for p in parameters])
+    lower = np.array([p.bounds[0] for p in parameters])
+    upper = np.array([p.bounds[1] for p in parameters])
+    weights = residual_weights(noise)
+    theta = np.zeros(len(names))
+    for step in range(1, MAX_STEPS + 1):
+        model = changed(NOMINAL, dict(zip(names, theta, strict=True)))
+        terms = list(map_flights(_TermsAt(model, names, residual_parameters, weights), flights))
+        gram = sum(t.gram for t in terms) + prior_inverse
+        linear = sum(t.linear for t in terms) - prior_inverse @ theta
+        chi_square = sum(t.chi_square for t in terms)
+        rows = sum(t.rows for t in terms)
+        covariance = np.linalg.inv(gram)
+        delta = _bounded_step(gram, linear, lower - theta, upper - theta)
+        theta = theta + delta
+        deviation = np.sqrt(np.diag(covariance))
+        log(f"step {step}: weighted residual {chi_square / max(rows, 1):.3f} per row, largest "
+            f"move {np.max(np.abs(delta) / deviation):.2f} posterior deviations")
+        if np.all(np.abs(delta) <= CONVERGED_SIGMAS * deviation):
+            break
+    model = changed(NOMINAL, dict(zip(names, theta, strict=True)))
+    final = list(map_flights(_TermsAt(model, names, residual_parameters, weights), flights))
+    rows = sum(t.rows for t in final)
+    reduced = sum(t.chi_square for t in final) / max(rows - len(names), 1)
+    covariance = np.linalg.inv(sum(t.gram for t in final) + prior_inverse) * max(reduced, 1.0)
+    deviation = np.sqrt(np.diag(covariance))
+    return ModelCalibration(
+        aircraft=model, names=names, units=tuple(p.unit for p in parameters),
+        values=np.array(list(values_of(model, names).values())),
+        prior_std=np.array([p.prior_std for p in parameters]), posterior_std=deviation,
+        correlations=covariance / np.outer(deviation, deviation), steps=step,
+        reduced_chi_square=reduced,
+        residuals={suite: [t.residuals[suite] for t in final] for suite in SUITES.values()})
+
+
+@dataclass(frozen=True)
+class _TermsAt:
+    """flight_terms at one model, as a picklable callable of the flight (for process pools)."""
+
+    model: FlownAircraft
+    names: tuple[str, ...]
+    residual_parameters: Mapping[str, Any]
+    weights: np.ndarray
+
+    def __call__(self, flight: SensorFlight) -> FlightTerms:
+        return flight_terms(flight, self.model, self.names, self.residual_parameters,
+                            self.weights)
+
+
+def _bounded_step(gram: np.ndarray, linear: np.ndarray, lower: np.ndarray,
+                  upper: np.ndarray) -> np.ndarray:
+    """argmin_d 1/2 d^T G d - h^T d subject to lower <= d <= upper, on ProxSuite (dense:
+    a handful of parameters)."""
+    n = linear.size
+    qp = proxqp.dense.QP(n, 0, 0, True)  # box constraints only
+    qp.settings.eps_abs = 1e-9
+    qp.settings.verbose = False
+    qp.init(gram, -linear, None, None, None, None, None, l_box=lower, u_box=upper)
+    qp.solve()
+    if qp.results.info.status != proxqp.QPSolverOutput.PROXQP_SOLVED:
+        raise RuntimeError(f"the calibration's least squares did not solve "
+                           f"({qp.results.info.status})")
+    return np.array(qp.results.x)

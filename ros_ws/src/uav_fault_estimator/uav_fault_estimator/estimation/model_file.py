@@ -1,0 +1,91 @@
+"""A model calibration file: what scripts/calibrate_model.py writes and residual_node reads.
+
+    model_file: aerosonde.xml
+    model_sha256: <hex>             # the aerosonde.xml it was made for: refused for any other
+    aircraft: {...}                 # as a scenario's aircraft block: what the models load
+    noise_calibration_file: NAME    # optional: mhe_node's noise from the same flights
+    parameters: {NAME: {unit, value, prior, prior_std, posterior_std}}   # what was found
+    worst_correlations: [...]       # what the flights could not separate
+    fit: {...}                      # steps, reduced chi-square, flights
+
+Only model_sha256, aircraft and noise_calibration_file are used; the rest says how the
+calibration came about. No ROS here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from uav_common.strict_yaml import FileKind, load_yaml
+from uav_sim.flown_aircraft import FlownAircraft, aircraft_file
+from uav_sim.scenario import read_aircraft
+
+from uav_fault_estimator.estimation.model_calibration import (
+    ModelCalibration,
+    model_file_sha256,
+)
+
+MODEL_KEY = "model"  # residual_node's /diagnostics key: its calibration file, or the shipped model
+SHIPPED_MODEL = "aerosonde.xml as shipped"
+
+
+class ModelCalibrationError(ValueError):
+    """A model calibration file that cannot be used (one line: which and why)."""
+
+
+MODEL_CALIBRATION_FILE = FileKind("model calibration", ModelCalibrationError, 64 * 1024,
+                                  "calibrate_model.py writes about 3 kB")
+
+
+@dataclass(frozen=True)
+class CalibratedModel:
+    """What a model calibration file gives: the aircraft the models load, and the noise
+    calibration made on the same flights (None: the shipped one)."""
+
+    aircraft: FlownAircraft
+    noise_file: Path | None
+
+
+def calibration_dict(calibration: ModelCalibration, flights: list[str],
+                     noise_file: str | None) -> dict:
+    """The file's mapping (module docstring), in its key order."""
+    entries = {
+        "model_file": aircraft_file().name,
+        "model_sha256": model_file_sha256(),
+        "aircraft": calibration.aircraft.to_dict(),
+    }
+    if noise_file:
+        entries["noise_calibration_file"] = noise_file
+    entries["parameters"] = {
+        name: {"unit": unit, "value": round(float(value), 4), "prior": 0.0,
+               "prior_std": float(prior), "posterior_std": round(float(posterior), 4)}
+        for name, unit, value, prior, posterior in zip(
+            calibration.names, calibration.units, calibration.values, calibration.prior_std,
+            calibration.posterior_std, strict=True)}
+    entries["worst_correlations"] = [
+        {"pair": [first, second], "correlation": round(value, 3)}
+        for first, second, value in calibration.worst_correlations()]
+    entries["fit"] = {"gauss_newton_steps": calibration.steps,
+                      "reduced_chi_square": round(calibration.reduced_chi_square, 4),
+                      "flights": flights}
+    return entries
+
+
+def load_model_calibration(path: str | Path) -> CalibratedModel:
+    """Read a model calibration file; ModelCalibrationError (one line) when it cannot be
+    read, is malformed, or was made for another aerosonde.xml than the one shipped."""
+    path = Path(path)
+    reader = load_yaml(MODEL_CALIBRATION_FILE, path)
+    reader.check_keys({"model_file", "model_sha256", "aircraft"},
+                      {"noise_calibration_file", "parameters", "worst_correlations", "fit"})
+    if reader.text("model_sha256") != model_file_sha256():
+        reader.fail(f"made for another model file ({reader.data['model_file']!r} with "
+                    f"SHA-256 {str(reader.data['model_sha256'])[:12]}...) than "
+                    f"{aircraft_file()} ({model_file_sha256()[:12]}...): recalibrate")
+    noise_file = None
+    if "noise_calibration_file" in reader.data:
+        noise_file = path.parent / reader.text("noise_calibration_file")
+        if not noise_file.is_file():
+            reader.fail(f"'noise_calibration_file' {noise_file} does not exist")
+    return CalibratedModel(read_aircraft(reader.child("aircraft")), noise_file)

@@ -1,0 +1,124 @@
+"""The prediction model's parameters a model calibration identifies, and what a value of them
+does to the model aircraft.
+
+Every parameter is a change from the shipped aerosonde.xml, in a unit of its own: a scale's
+change in percent (CDmin at +10 % is the file's CDmin times 1.10), a vane's bias in degrees.
+So the nominal model is 0 in every parameter, and a calibrated model is a FlownAircraft
+(uav_sim.flown_aircraft) that the residual node's model copies load: the scenario's
+`aircraft:` block read the other way round, one schema for both.
+
+- every aerodynamic coefficient of aerosonde.xml by its name there (coefficient_names());
+- mass_scale, thrust_scale, inertia_{x,y,z}_scale: of the empty mass, the propeller's thrust
+  and the empty inertia about each body axis;
+- airspeed_scale, angle_of_attack_deg, sideslip_deg: the air-data sensors' errors, which the
+  residual generator takes out of the measured air data.
+
+The CG offset is not a parameter: on these data it acts as Cm0 and Cmalpha changes (and Cn0,
+Cl0 sideways), which the coefficients take. No ROS here.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from uav_sim.flown_aircraft import (
+    BIAS_LIMIT_DEG,
+    SCALE_RANGE,
+    FlownAircraft,
+    coefficient_names,
+)
+
+MASS_AND_THRUST = ("mass_scale", "thrust_scale")
+INERTIA = ("inertia_x_scale", "inertia_y_scale", "inertia_z_scale")
+# SensorBias's fields, in its units (a scale, degrees)
+AIR_DATA_BIASES = ("airspeed_scale", "angle_of_attack_deg", "sideslip_deg")
+# What calibrate_model.py identifies unless told otherwise: what the flights of a normal
+# mission (straight legs and turns at a few airspeeds, fault-free) separate, measured on three
+# such flights (docs/model_calibration.md): every pair's posterior correlation below 0.95
+# but one (CL0 with the vane bias, 0.95). Left out by default, each for the pair it makes:
+# mass_scale (with CLalpha 0.988: lift over mass is what level flight sees, and thrust 0.96),
+# CDinduced (with CL0 -0.97), Cmde (with Cmalpha 0.985: trim ties elevator to alpha),
+# airspeed_scale (dynamic pressure scales every force alike). A lateral set (Clbeta, Cnbeta,
+# Clda, Clp, Cnr, ...) may be asked for by name; the wing faults barely see it.
+DEFAULT_PARAMETERS = ("CL0", "CLalpha", "CDmin", "Cm0", "Cmalpha", "thrust_scale",
+                      "angle_of_attack_deg")
+_SCALE_LIMITS_PCT = (100.0 * (SCALE_RANGE[0] - 1.0), 100.0 * (SCALE_RANGE[1] - 1.0))
+
+
+@dataclass(frozen=True)
+class ModelParameter:
+    """One parameter: its unit ("%" of a scale, or "deg"), the prior's standard deviation
+    about the nominal 0, the secant step of its sensitivity and its bounds, all in its unit."""
+
+    name: str
+    unit: str
+    prior_std: float
+    step: float
+    bounds: tuple[float, float]
+
+    @property
+    def is_bias(self) -> bool:
+        """An air-data sensor's error (taken out of the air data, not a model copy's)."""
+        return self.name in AIR_DATA_BIASES
+
+
+def parameter_names() -> tuple[str, ...]:
+    """Every parameter a calibration can identify, coefficients first in the file's order."""
+    return coefficient_names() + MASS_AND_THRUST + INERTIA + AIR_DATA_BIASES
+
+
+def model_parameter(name: str) -> ModelParameter:
+    """The parameter's definition; ValueError naming it when it is not one."""
+    if name not in parameter_names():
+        raise ValueError(f"unknown model parameter '{name}'; known: "
+                         f"{', '.join(parameter_names())}")
+    if name.endswith("_deg"):
+        return ModelParameter(name, "deg", prior_std=1.0, step=0.2,
+                              bounds=(-BIAS_LIMIT_DEG, BIAS_LIMIT_DEG))
+    # A priori a real aircraft is within about 10 % of its model in each (the errors of
+    # docs/model_calibration.md's table); a pitot's scale within 3 %.
+    prior_std = 3.0 if name == "airspeed_scale" else 10.0
+    return ModelParameter(name, "%", prior_std=prior_std, step=1.0, bounds=_SCALE_LIMITS_PCT)
+
+
+def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircraft:
+    """The aircraft with each named parameter moved by its change [its unit]."""
+    coefficients = dict(aircraft.coefficients)
+    inertia = list(aircraft.inertia_scale)
+    fields: dict[str, object] = {}
+    bias: dict[str, float] = {}
+    for name, change in changes.items():
+        parameter = model_parameter(name)
+        step = float(change) / 100.0 if parameter.unit == "%" else float(change)
+        if name in coefficient_names():
+            coefficients[name] = coefficients.get(name, 1.0) + step
+        elif name in INERTIA:
+            inertia[INERTIA.index(name)] += step
+        elif parameter.is_bias:
+            bias[name] = getattr(aircraft.sensor_bias, name) + step
+        else:
+            fields[name] = getattr(aircraft, name) + step
+    return dataclasses.replace(
+        aircraft, coefficients=tuple(coefficients.items()), inertia_scale=tuple(inertia),
+        sensor_bias=dataclasses.replace(aircraft.sensor_bias, **bias), **fields)
+
+
+def values_of(aircraft: FlownAircraft, names: tuple[str, ...]) -> dict[str, float]:
+    """The aircraft's value of each named parameter [its unit]: how it differs from the
+    shipped model."""
+    coefficients = dict(aircraft.coefficients)
+    values = {}
+    for name in names:
+        if name in coefficient_names():
+            value = coefficients.get(name, 1.0)
+        elif name in INERTIA:
+            value = aircraft.inertia_scale[INERTIA.index(name)]
+        elif name in AIR_DATA_BIASES:
+            value = getattr(aircraft.sensor_bias, name)
+        else:
+            value = getattr(aircraft, name)
+        # a scale is 1 in the nominal model, a bias 0
+        values[name] = 100.0 * (value - 1.0) if model_parameter(name).unit == "%" else value
+    return values

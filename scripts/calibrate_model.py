@@ -1,0 +1,98 @@
+#!/usr/bin/env python3
+"""Calibrate the prediction model from recordings of fault-free flights.
+
+    python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--parameters A,B,...]
+
+RECORDING: a rosbag2 folder (demo.sh's DIR/bag, bringup's or recorder_node's) with /state,
+/controls, /wind/filtered and, where the aircraft has them, /air_data of a flight with no
+fault. Identifies the model's parameters (default: model_parameters.DEFAULT_PARAMETERS; any
+aerodynamic coefficient of aerosonde.xml by name, mass_scale, thrust_scale,
+inertia_{x,y,z}_scale, airspeed_scale, angle_of_attack_deg, sideslip_deg) so that the
+models fit the flights' accelerations (estimation/model_calibration.py), prints each with
+its posterior deviation and the pairs the flights cannot separate, and writes MODEL.yaml for
+residual_node's model_calibration_file (demo.sh --model-calibration MODEL.yaml) and, beside
+it, MODEL.noise.yaml: the residual noise of the calibrated model on the same flights, per
+sensor suite, for mhe_node's noise_calibration_file (calibrate_estimator.py's file, made
+from these flights instead of simulated ones; MODEL.yaml names it, and demo.sh passes both).
+
+Exit status: 0 written; 2 a bad argument or recording (one line).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.estimation.model_calibration import calibrate
+from uav_fault_estimator.estimation.model_file import calibration_dict
+from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
+from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
+from uav_fault_estimator.offline import each_in_processes, write_calibration
+from uav_fault_estimator.recording.project_bag import (
+    RecordingError,
+    project_typestore,
+    sensor_flight_from_recording,
+)
+
+INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING")
+    parser.add_argument("--out", type=Path, required=True, metavar="MODEL.yaml")
+    parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS),
+                        help="comma-separated names (default: %(default)s)")
+    arguments = parser.parse_args()
+    started = time.monotonic()
+    names = [name.strip() for name in arguments.parameters.split(",") if name.strip()]
+    try:
+        for name in names:
+            model_parameter(name)
+        if len(set(names)) != len(names) or not names:
+            raise ValueError(f"--parameters must name each parameter once, got {names}")
+        typestore = project_typestore()
+        flights = [sensor_flight_from_recording(bag, typestore) for bag in arguments.recordings]
+    except (ValueError, RecordingError) as error:
+        print(f"calibrate_model.py: {error}", file=sys.stderr)
+        return 2
+    minutes = sum(f.times_s[-1] - f.times_s[0] for f in flights) / 60.0
+    print(f"{len(flights)} flights, {minutes:.1f} min; parameters {', '.join(names)}")
+    calibration = calibrate(flights, names,
+                            default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                            load_noise_calibration(), map_flights=each_in_processes)
+    _print_calibration(calibration)
+    noise_path = arguments.out.with_suffix(".noise.yaml")
+    sources = f"{len(flights)} recorded fault-free flights ({minutes:.1f} min): " + ", ".join(
+        f.name for f in flights)
+    write_calibration(noise_path, f"# Written by scripts/calibrate_model.py: residuals of the "
+                      f"calibrated model ({arguments.out.name}) on\n# {sources}.\n",
+                      fit_noise(calibration.residuals).to_dict(), "the same flights",
+                      time.monotonic() - started)
+    write_calibration(arguments.out, f"# Written by scripts/calibrate_model.py from {sources}."
+                      "\n# For residual_node's model_calibration_file.\n",
+                      calibration_dict(calibration, [f.name for f in flights], noise_path.name),
+                      f"{len(flights)} flights", time.monotonic() - started)
+    return 0
+
+
+def _print_calibration(calibration) -> None:
+    """Each parameter with its posterior deviation, and the worst-correlated pairs."""
+    print(f"{'parameter':<22}{'value':>9}{'+-':>8}  unit  (prior +- deviation)")
+    for name, unit, value, posterior, prior in zip(
+            calibration.names, calibration.units, calibration.values,
+            calibration.posterior_std, calibration.prior_std, strict=True):
+        print(f"{name:<22}{value:>9.3f}{posterior:>8.3f}  {unit:<4}  (0 +- {prior:g})")
+    print(f"{calibration.steps} Gauss-Newton steps, reduced chi-square "
+          f"{calibration.reduced_chi_square:.3f}")
+    for first, second, value in calibration.worst_correlations():
+        verdict = ("hardly separated: the flights fix a combination of the two, the prior "
+                   "the split" if abs(value) >= INSEPARABLE else "separated")
+        print(f"  correlation {first} / {second}: {value:+.3f} ({verdict})")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

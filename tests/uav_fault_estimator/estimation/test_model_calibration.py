@@ -1,0 +1,212 @@
+"""Model calibration: parameters, the fit on a flight of an aircraft that is not its model,
+the calibration file, and the recording a calibration reads."""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from helpers.flights import calm
+from helpers.repo import SCRIPTS
+from uav_common.channels import AIR_DATA_FIELDS, CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.message_fields import CONTROL_FIELDS, STATE_FIELDS
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.estimation.model_calibration import calibrate, model_file_sha256
+from uav_fault_estimator.estimation.model_file import (
+    ModelCalibrationError,
+    calibration_dict,
+    load_model_calibration,
+)
+from uav_fault_estimator.estimation.model_parameters import (
+    DEFAULT_PARAMETERS,
+    changed,
+    model_parameter,
+    values_of,
+)
+from uav_fault_estimator.estimation.noise_model import load_noise_calibration
+from uav_fault_estimator.offline import sensor_flight
+from uav_fault_estimator.recording.project_bag import (
+    Recording,
+    RecordingError,
+    project_typestore,
+    sensor_flight_from_recording,
+)
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias
+from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
+
+# A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane
+TRUTH = {"CDmin": 8.0, "Cmalpha": 6.0, "angle_of_attack_deg": 0.4}
+FLOWN = FlownAircraft(coefficients=(("CDmin", 1.08), ("Cmalpha", 1.06)),
+                      sensor_bias=SensorBias(angle_of_attack_deg=0.4))
+FLIGHT_S = 120.0  # the first leg and the first turn
+
+
+@pytest.fixture(scope="module")
+def flight():
+    """The default route in calm air with ideal sensors and air data, of FLOWN."""
+    scenario = calm(load_scenario(default_scenario_path()), FLIGHT_S)
+    return sensor_flight(dataclasses.replace(
+        scenario, aircraft=FLOWN, sensors=SensorSuite(air_data=True, noise=False)))
+
+
+@pytest.fixture(scope="module")
+def calibration(flight):
+    return calibrate([flight], tuple(TRUTH),
+                     default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                     load_noise_calibration(), log=lambda line: None)
+
+
+def test_a_parameter_change_and_its_value_are_one_another():
+    changes = {"CDmin": 10.0, "mass_scale": -3.0, "inertia_y_scale": 5.0,
+               "airspeed_scale": 2.0, "angle_of_attack_deg": 0.5}
+    aircraft = changed(NOMINAL, changes)
+    assert dict(aircraft.coefficients) == {"CDmin": pytest.approx(1.10)}
+    assert aircraft.mass_scale == pytest.approx(0.97)
+    assert aircraft.inertia_scale == pytest.approx((1.0, 1.05, 1.0))
+    assert aircraft.sensor_bias == SensorBias(airspeed_scale=pytest.approx(1.02),
+                                              angle_of_attack_deg=0.5)
+    assert values_of(aircraft, tuple(changes)) == pytest.approx(changes)
+
+
+def test_an_unknown_parameter_is_named():
+    with pytest.raises(ValueError, match="unknown model parameter 'CDwing'"):
+        model_parameter("CDwing")
+    for name in DEFAULT_PARAMETERS:
+        model_parameter(name)
+
+
+@pytest.mark.timeout(120)
+def test_the_calibration_finds_how_the_flown_aircraft_differs(calibration):
+    """On one calm flight with ideal sensors each parameter is found within 3 posterior
+    deviations and close to the truth in absolute terms (0.5 % of a scale, 0.02 deg)."""
+    found = dict(zip(calibration.names, calibration.values, strict=True))
+    deviation = dict(zip(calibration.names, calibration.posterior_std, strict=True))
+    for name, truth in TRUTH.items():
+        assert abs(found[name] - truth) <= 3 * deviation[name], (name, found, deviation)
+    assert found["CDmin"] == pytest.approx(8.0, abs=0.5)
+    assert found["Cmalpha"] == pytest.approx(6.0, abs=0.5)
+    assert found["angle_of_attack_deg"] == pytest.approx(0.4, abs=0.02)
+    assert calibration.correlations.shape == (3, 3)
+    assert np.allclose(np.diag(calibration.correlations), 1.0)
+
+
+@pytest.mark.timeout(120)
+def test_the_calibration_file_gives_the_models_back(calibration, tmp_path):
+    noise = tmp_path / "model.noise.yaml"
+    noise.write_text("the noise file's existence is what is checked here\n")
+    path = tmp_path / "model.yaml"
+    path.write_text(yaml.safe_dump(calibration_dict(calibration, ["one flight"], noise.name),
+                                   sort_keys=False))
+    loaded = load_model_calibration(path)
+    assert loaded.noise_file == noise
+    assert dict(loaded.aircraft.coefficients) == pytest.approx(dict(
+        calibration.aircraft.coefficients))
+    assert loaded.aircraft.sensor_bias.angle_of_attack_deg == pytest.approx(
+        calibration.aircraft.sensor_bias.angle_of_attack_deg)
+
+
+def write_calibration(path: Path, **changes) -> Path:
+    entries = {"model_file": "aerosonde.xml", "model_sha256": model_file_sha256(),
+               "aircraft": {"coefficients": {"CDmin": 1.1}}, **changes}
+    path.write_text(yaml.safe_dump(entries))
+    return path
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize(("changes", "words"), [
+    ({"model_sha256": "0" * 64}, "made for another model file"),
+    ({"aircraft": {"coefficients": {"CDwing": 1.1}}}, "unknown key 'aircraft.coefficients.CDwing'"),
+    ({"aircraft": {"mass_scale": 3.0}}, "'aircraft.mass_scale'"),
+    ({"noise_calibration_file": "nowhere.yaml"}, "does not exist"),
+    ({"colour": "red"}, "unknown key 'colour'"),
+])
+def test_a_calibration_that_cannot_be_used_is_one_line(tmp_path, changes, words):
+    path = write_calibration(tmp_path / "model.yaml", **changes)
+    with pytest.raises(ModelCalibrationError) as raised:
+        load_model_calibration(path)
+    message = str(raised.value)
+    assert words in message and str(path) in message and "\n" not in message
+
+
+def write_recording(path: Path, flight, seeded_pct: float = 0.0) -> Path:
+    """The flight as recorder_node records sim_node's streams."""
+    typestore = project_typestore()
+    types = typestore.types
+    recording = Recording(path, typestore)
+    topics = {"/state": "AircraftState", "/controls": "ControlInputs",
+              "/wind/filtered": "WindEstimate", "/air_data": "AirData",
+              "/faults/seeded": "FaultVector"}
+    try:
+        for topic, name in topics.items():
+            recording.add_topic(topic, f"uav_fault_msgs/msg/{name}")
+        for k, time_s in enumerate(flight.times_s):
+            stamp_ns = round(time_s * 1e9)
+            header = types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](
+                sec=stamp_ns // 1_000_000_000, nanosec=stamp_ns % 1_000_000_000), frame_id="")
+            fields = {
+                "/state": dict(zip(STATE_FIELDS, map(float, flight.states[k]), strict=True)),
+                "/controls": {f: bool(v) if c == "ignition" else float(v) for f, c, v in zip(
+                    CONTROL_FIELDS, CONTROL_CHANNELS, flight.controls[k], strict=True)},
+                "/wind/filtered": {"north_mps": float(flight.winds_ned_mps[k, 0]),
+                                   "east_mps": float(flight.winds_ned_mps[k, 1]),
+                                   "down_mps": float(flight.winds_ned_mps[k, 2]),
+                                   "filter_time_constant_s": 10.0},
+                "/air_data": dict(zip(AIR_DATA_FIELDS, map(float, flight.air_data[k]),
+                                      strict=True)),
+                "/faults/seeded": {"names": ["right_wing_lift_loss"],
+                                   "values_pct": np.array([seeded_pct if time_s > 10.0 else 0.0])},
+            }
+            for topic, name in topics.items():
+                message = types[f"uav_fault_msgs/msg/{name}"](header=header, **fields[topic])
+                recording.write(topic, stamp_ns, typestore.serialize_cdr(
+                    message, f"uav_fault_msgs/msg/{name}"))
+    finally:
+        recording.close()
+    return path
+
+
+@pytest.fixture(scope="module")
+def short_flight(flight):
+    keep = flight.times_s <= 20.0
+    return dataclasses.replace(flight, times_s=flight.times_s[keep],
+                               states=flight.states[keep], controls=flight.controls[keep],
+                               winds_ned_mps=flight.winds_ned_mps[keep],
+                               air_data=flight.air_data[keep])
+
+
+@pytest.mark.timeout(60)
+def test_a_recording_reads_back_as_the_flight(short_flight, tmp_path):
+    bag = write_recording(tmp_path / "bag", short_flight)
+    read = sensor_flight_from_recording(bag, project_typestore())
+    assert np.allclose(read.times_s, short_flight.times_s, rtol=0.0, atol=1e-9)  # stamps: ns
+    for field in ("states", "controls", "winds_ned_mps", "air_data"):
+        assert np.array_equal(getattr(read, field), getattr(short_flight, field)), field
+    assert len(STATE_CHANNELS) == read.states.shape[1]
+
+
+@pytest.mark.timeout(60)
+def test_a_recording_with_a_fault_seeded_is_refused(short_flight, tmp_path):
+    bag = write_recording(tmp_path / "bag", short_flight, seeded_pct=5.0)
+    with pytest.raises(RecordingError,
+                       match=r"not a fault-free flight \(right_wing_lift_loss seeded"):
+        sensor_flight_from_recording(bag, project_typestore())
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(("arguments", "words"), [
+    (["nowhere", "--out", "m.yaml"], "recording nowhere: no such folder"),
+    (["nowhere", "--out", "m.yaml", "--parameters", "CDmin,CDwing"],
+     "unknown model parameter 'CDwing'"),
+])
+def test_calibrate_model_says_what_is_wrong_in_one_line(tmp_path, arguments, words):
+    result = subprocess.run([sys.executable, str(SCRIPTS / "calibrate_model.py"), *arguments],
+                            capture_output=True, text=True, timeout=50, cwd=tmp_path)
+    assert result.returncode == 2
+    assert words in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "m.yaml").exists()
+
