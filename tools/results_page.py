@@ -197,6 +197,35 @@ def airspeed_schedule(data: Mapping[str, Any]) -> list[str]:
           data[name].get("roll_gain_std")) for name in present))
 
 
+# --- the model error study (studies/model_error.py) --------------------------------------
+
+RUN_FIGURES = (("fault-free largest [%]", "fault_free_largest_pct"),
+               ("default finals [%]", "default_final_pct"), ("default RMS [%]", "default_rmse_pct"),
+               ("default delays [s]", "default_delay_s"))
+
+
+def model_error(data: Mapping[str, Any]) -> list[str]:
+    """Per flown aircraft, the test flights without and with its calibration, and what the
+    calibration found."""
+    lines = ["Faults in the order right wing lift loss, right wing drag increase, left wing "
+             "lift loss, left wing drag increase (default flight seeded 10 / 20 / 15 / 25 %).",
+             ""]
+    lines += table(("flown aircraft", "model", *(label for label, _ in RUN_FIGURES),
+                    "false alarms"), (
+        (name, "calibrated" if label == "with" else "shipped",
+         *(number(list(result[label][key].values())).replace(", ", " / ")
+           for _, key in RUN_FIGURES),
+         ", ".join(sorted(set(result[label]["fault_free_false_alarms"]
+                              + result[label]["default_false_alarms"]))) or "none")
+        for name, result in data.items() for label in ("without", "with")))
+    return lines + table(("flown aircraft", "calibration wall [s]",
+                          "found (value ± posterior deviation)"), (
+        (name, result.get("calibration_wall_s"), "; ".join(
+            f"{key} {number(value)} ± {number(deviation)}"
+            for key, (value, deviation) in result.get("calibrated", {}).items()))
+        for name, result in data.items()))
+
+
 # --- demo runs (metrics.json of scripts/demo.sh) ----------------------------------------
 
 
@@ -254,6 +283,11 @@ SECTIONS = (
     Section("Soak", "soak.json", "python -m benchmarks.soak --json docs/soak.json", soak,
             "A long flight replayed into a clean and a disturbed copy of the nodes, the "
             "disturbed one given bad messages (docs/performance.md)."),
+    Section("Model error", "model_calibration.json",
+            "python -m studies.model_error --json docs/model_calibration.json", model_error,
+            "Flown aircraft that differ from the model, each flown through the ROS graph "
+            "without and with a calibration from three fault-free flights of it at 22, 25 and "
+            "28 m/s (docs/model_calibration.md)."),
     Section("Airspeed schedule", "airspeed_schedule.json",
             "python -m studies.airspeed_schedule --json docs/airspeed_schedule.json",
             airspeed_schedule,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
 
 import pytest
 from helpers.process_table import NODE_NAMES, kill_all, processes
@@ -87,3 +88,17 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
                              "--scenario", scenarios[1]], "refused")
     assert refused.wait(10) == 2
     assert "--ns names the namespace of one aircraft" in refused.output()
+
+
+@pytest.mark.timeout(120)
+def test_a_model_calibration_that_cannot_be_used_ends_bringup_before_any_node(tmp_path):
+    """One line naming the file, status 2, and no node started (no log folder filled)."""
+    calibration = tmp_path / "model.yaml"
+    calibration.write_text("model_file: aerosonde.xml\nmodel_sha256: '0'\naircraft: {}\n")
+    logs = tmp_path / "logs"
+    result = subprocess.run([str(BRINGUP), "--model-calibration", str(calibration), "--logs",
+                             str(logs)], capture_output=True, text=True, timeout=100)
+    assert result.returncode == 2, result
+    lines = [line for line in result.stderr.splitlines() if line.startswith("bringup.sh:")]
+    assert len(lines) == 1 and "made for another model file" in lines[0], result.stderr
+    assert not logs.exists() or not any(logs.iterdir())

@@ -416,3 +416,16 @@ def test_a_process_ended_by_the_stops_sigint_is_no_failure(tmp_path) -> None:
                                       tmp_path / "trap.log")
     time.sleep(0.5)  # the trap set
     assert demo.stop() == ["killed exited with status -9 (killed by SIGKILL) when stopped"]
+
+
+@pytest.mark.timeout(120)
+def test_a_model_calibration_that_cannot_be_used_ends_the_demo_before_any_node(tmp_path,
+                                                                                run_dir):
+    calibration = tmp_path / "model.yaml"
+    calibration.write_text("model_file: aerosonde.xml\nmodel_sha256: '0'\naircraft: {}\n")
+    result = subprocess.run([str(DEMO), "--out", str(run_dir), "--model-calibration",
+                             str(calibration)], capture_output=True, text=True, timeout=100)
+    lines = result.stderr.splitlines()
+    assert result.returncode == 2, result
+    assert len(lines) == 1 and "made for another model file" in lines[0], result.stderr
+    assert not run_dir.exists()  # no output folder: no node was started
