@@ -15,7 +15,8 @@ it, MODEL.noise.yaml: the residual noise of the calibrated model on the same fli
 sensor suite, for mhe_node's noise_calibration_file (calibrate_estimator.py's file, made
 from these flights instead of simulated ones; MODEL.yaml names it, and demo.sh passes both).
 
-Exit status: 0 written; 2 a bad argument or recording (one line).
+Exit status: 0 written; 1 the least squares did not solve; 2 a bad argument or recording
+(one line each).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.estimation.model_calibration import calibrate
+from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
 from uav_fault_estimator.estimation.model_file import calibration_dict
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
 from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
@@ -61,9 +62,13 @@ def main() -> int:
         return 2
     minutes = sum(f.times_s[-1] - f.times_s[0] for f in flights) / 60.0
     print(f"{len(flights)} flights, {minutes:.1f} min; parameters {', '.join(names)}")
-    calibration = calibrate(flights, names,
-                            default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                            load_noise_calibration(), map_flights=each_in_processes)
+    try:
+        calibration = calibrate(flights, names,
+                                default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                                load_noise_calibration(), map_flights=each_in_processes)
+    except CalibrationError as error:
+        print(f"calibrate_model.py: {error}", file=sys.stderr)
+        return 1
     _print_calibration(calibration)
     noise_path = arguments.out.with_suffix(".noise.yaml")
     sources = f"{len(flights)} recorded fault-free flights ({minutes:.1f} min): " + ", ".join(

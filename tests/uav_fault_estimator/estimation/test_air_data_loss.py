@@ -11,6 +11,7 @@ import dataclasses
 import numpy as np
 import pytest
 from uav_common.channels import AIR_DATA_CHANNELS
+from uav_common.package_data import default_parameters
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
 from uav_fault_estimator.offline import each_in_processes, fly_and_estimate
@@ -74,7 +75,8 @@ def test_a_fault_starting_during_the_loss_is_found_when_the_hold_ends():
     for name, fault in faults.items():
         print(f"{name}: {fault}")
     assert false_alarms == []
-    hold_ends_s = 120.0 + SuiteNoise.HOLD_AFTER_TAU_A * 4.0  # residual_node's tau_a_s
+    tau_a_s = default_parameters("uav_fault_estimator", "residual_node.yaml")["tau_a_s"]
+    hold_ends_s = 120.0 + SuiteNoise.HOLD_AFTER_TAU_A * tau_a_s
     delay_s = faults["left_wing_drag_increase"]["detection_delay_s"]
     assert hold_ends_s - 0.5 <= 110.0 + delay_s <= hold_ends_s + 3.0
     for fault in faults.values():

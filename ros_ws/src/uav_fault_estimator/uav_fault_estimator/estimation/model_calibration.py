@@ -32,6 +32,7 @@ from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, aircraft_file
 from uav_sim.propeller import Propeller
 
 from uav_fault_estimator.estimation.model_parameters import (
+    SCALE_STEP_PCT,
     ModelParameter,
     changed,
     model_parameter,
@@ -126,11 +127,9 @@ def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
     propeller = Propeller.from_aircraft()
     p = residual_parameters
     copies = [q.name for q in parameters if not q.is_bias]
-    # one secant step for the copies: every scale's is the same
-    step_pct = parameters[0].step if copies else 1.0
     return ResidualGenerator(
         lambda changes: AircraftPredictor({}, propeller, changed(model, changes)),
-        copies, step_pct, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
+        copies, SCALE_STEP_PCT, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
         sensor_bias=model.sensor_bias,
         bias_steps={q.name: _bias_step(q) for q in parameters if q.is_bias})
 
@@ -188,6 +187,10 @@ class ModelCalibration:
 
 
 MapFlights = Callable[[Callable, Iterable], Iterable]
+
+
+class CalibrationError(RuntimeError):
+    """A calibration that could not be made (one line: why)."""
 
 
 def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
@@ -259,6 +262,7 @@ def _bounded_step(gram: np.ndarray, linear: np.ndarray, lower: np.ndarray,
     qp.init(gram, -linear, None, None, None, None, None, l_box=lower, u_box=upper)
     qp.solve()
     if qp.results.info.status != proxqp.QPSolverOutput.PROXQP_SOLVED:
-        raise RuntimeError(f"the calibration's least squares did not solve "
-                           f"({qp.results.info.status})")
+        raise CalibrationError(f"the calibration's least squares did not solve "
+                               f"({qp.results.info.status}): the flights may not excite the "
+                               "parameters asked for")
     return np.array(qp.results.x)

@@ -44,6 +44,8 @@ AIR_DATA_BIASES = ("airspeed_scale", "angle_of_attack_deg", "sideslip_deg")
 # Clda, Clp, Cnr, ...) may be asked for by name; the wing faults barely see it.
 DEFAULT_PARAMETERS = ("CL0", "CLalpha", "CDmin", "Cm0", "Cmalpha", "thrust_scale",
                       "angle_of_attack_deg")
+SCALE_STEP_PCT = 1.0  # secant step of a scale [%]
+BIAS_STEP_DEG = 0.2  # secant step of a vane bias [deg]
 _SCALE_LIMITS_PCT = (100.0 * (SCALE_RANGE[0] - 1.0), 100.0 * (SCALE_RANGE[1] - 1.0))
 
 
@@ -75,12 +77,13 @@ def model_parameter(name: str) -> ModelParameter:
         raise ValueError(f"unknown model parameter '{name}'; known: "
                          f"{', '.join(parameter_names())}")
     if name.endswith("_deg"):
-        return ModelParameter(name, "deg", prior_std=1.0, step=0.2,
+        return ModelParameter(name, "deg", prior_std=1.0, step=BIAS_STEP_DEG,
                               bounds=(-BIAS_LIMIT_DEG, BIAS_LIMIT_DEG))
     # A priori a real aircraft is within about 10 % of its model in each (the errors of
     # docs/model_calibration.md's table); a pitot's scale within 3 %.
     prior_std = 3.0 if name == "airspeed_scale" else 10.0
-    return ModelParameter(name, "%", prior_std=prior_std, step=1.0, bounds=_SCALE_LIMITS_PCT)
+    return ModelParameter(name, "%", prior_std=prior_std, step=SCALE_STEP_PCT,
+                          bounds=_SCALE_LIMITS_PCT)
 
 
 def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircraft:
