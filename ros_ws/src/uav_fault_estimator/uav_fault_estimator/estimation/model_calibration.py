@@ -21,7 +21,7 @@ No ROS here.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,7 +41,12 @@ from uav_fault_estimator.estimation.model_parameters import (
 from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration
 from uav_fault_estimator.estimation.prediction import AircraftPredictor
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
-from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, ResidualGenerator
+from uav_fault_estimator.estimation.residuals import (
+    WIND_AIR_DATA,
+    WIND_FILTERED,
+    ResidualGenerator,
+    ResidualSample,
+)
 
 MAX_STEPS = 6  # Gauss-Newton steps at most
 CONVERGED_SIGMAS = 0.05  # a step below this many posterior deviations in each parameter ends it
@@ -96,17 +101,12 @@ def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str
     residuals of the model itself, flying the air data and the filtered wind."""
     parameters = [model_parameter(name) for name in names]
     generator = _generator(model, parameters, residual_parameters)
-    period_s = float(residual_parameters["update_period_s"])
     n = len(parameters)
     gram, linear, chi_square, rows = np.zeros((n, n)), np.zeros(n), 0.0, 0
     order = [generator.column_names.index(p.name) for p in parameters]
     per_unit = np.array([_column_per_unit(p) for p in parameters])
     air_data_rows = []
-    for k, time_s in enumerate(flight.times_s):
-        sample = generator.update(time_s, flight.states[k], flight.controls[k],
-                                  flight.winds_ned_mps[k], flight.air_data[k])
-        if sample is None or not on_grid(time_s, period_s) or not sample.valid.all():
-            continue
+    for sample in _grid_samples(generator, flight, residual_parameters, flight.air_data):
         term = sample_normal_equations(sample.residual, sample.sensitivity[:, order] * per_unit,
                                        sample.valid, weights, n)
         gram += term.gram
@@ -115,9 +115,30 @@ def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str
         rows += int(np.count_nonzero(term.whitened_y))
         if sample.wind_source == WIND_AIR_DATA:
             air_data_rows.append(sample.residual)
+    # the other suite's noise from the same flights: the models on the filtered wind alone
+    filtered = [sample.residual for sample in _grid_samples(
+        _generator(model, (), residual_parameters), flight, residual_parameters,
+        np.full_like(flight.air_data, np.nan))]
     residuals = {SUITES[WIND_AIR_DATA]: np.array(air_data_rows).reshape(-1, 6),
-                 "filtered_wind": _filtered_wind_residuals(flight, model, residual_parameters)}
+                 SUITES[WIND_FILTERED]: np.array(filtered).reshape(-1, 6)}
     return FlightTerms(gram, linear, chi_square, rows, residuals)
+
+
+def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
+                  residual_parameters: Mapping[str, Any],
+                  air_data: np.ndarray) -> Iterator[ResidualSample]:
+    """The generator's samples on residual_node's update grid whose rows are all valid.
+    Samples it refuses (a stamp that does not increase, a state the models cannot evaluate)
+    are left out, as residual_node leaves them out."""
+    period_s = float(residual_parameters["update_period_s"])
+    for k, time_s in enumerate(flight.times_s):
+        try:
+            sample = generator.update(time_s, flight.states[k], flight.controls[k],
+                                      flight.winds_ned_mps[k], air_data[k])
+        except ValueError:
+            continue
+        if sample is not None and on_grid(time_s, period_s) and sample.valid.all():
+            yield sample
 
 
 def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
@@ -143,21 +164,6 @@ def _column_per_unit(parameter: ModelParameter) -> float:
     """What turns the generator's column into one per parameter unit: a bias's column is per
     SensorBias unit (per unit scale, or per degree)."""
     return 0.01 if parameter.is_bias and parameter.unit == "%" else 1.0
-
-
-def _filtered_wind_residuals(flight: SensorFlight, model: FlownAircraft,
-                             residual_parameters: Mapping[str, Any]) -> np.ndarray:
-    """The model's residuals (K, 6) on the update grid flying the filtered wind only: the
-    other suite's noise, from the same flights."""
-    generator = _generator(model, (), residual_parameters)
-    period_s = float(residual_parameters["update_period_s"])
-    rows = []
-    for k, time_s in enumerate(flight.times_s):
-        sample = generator.update(time_s, flight.states[k], flight.controls[k],
-                                  flight.winds_ned_mps[k], None)
-        if sample is not None and on_grid(time_s, period_s) and sample.valid.all():
-            rows.append(sample.residual)
-    return np.array(rows).reshape(-1, 6)
 
 
 @dataclass(frozen=True)
