@@ -173,11 +173,12 @@ class Demo:
     """One run: the node processes, their watch, and their stop."""
 
     def __init__(self, vehicles: list[Vehicle], out: Path,
-                 model_calibration: Path | None = None) -> None:
+                 model_calibration: Path | None = None, noise_file: Path | None = None) -> None:
+        """model_calibration: residual_node's model_calibration_file; noise_file: the noise
+        calibration it names, for mhe_node (None: none)."""
         self.vehicles = vehicles
         self.model_args = {"residual_node": [], "mhe_node": []}  # of a model calibration
         if model_calibration is not None:
-            noise_file = load_model_calibration(model_calibration).noise_file
             self.model_args = {
                 "residual_node": ["-p", f"model_calibration_file:={model_calibration}"],
                 "mhe_node": ["-p", f"noise_calibration_file:={noise_file}"] if noise_file else []}
@@ -433,8 +434,9 @@ def main() -> int:
         overrides = [mhe_overrides(scenario) for scenario in scenarios]
         check_one_clock(scenarios)
         model_calibration = arguments.model_calibration and arguments.model_calibration.resolve()
-        if model_calibration:
-            load_model_calibration(model_calibration)  # refused here, before any process
+        # refused here, before any process
+        noise_file = (load_model_calibration(model_calibration).noise_file
+                      if model_calibration else None)
     except (ScenarioError, ModelCalibrationError) as error:
         print(f"demo: {' '.join(str(error).split())}", file=sys.stderr)  # one line
         return 2
@@ -464,7 +466,7 @@ def main() -> int:
         print(f"demo: {vehicle.namespace + ' flies ' if vehicle.namespace else ''}scenario "
               f"'{vehicle.scenario.name}' ({vehicle.scenario.path})", flush=True)
     print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
-    demo = Demo(vehicles, out, model_calibration)
+    demo = Demo(vehicles, out, model_calibration, noise_file)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
         received = demo.fly()

@@ -83,12 +83,12 @@ class FlownAircraft:
 
     def differences(self) -> dict:
         """to_dict's entries where the aircraft is not the model ({}: it is the model)."""
-        nominal = FlownAircraft().to_dict()
-        entries = {key: value for key, value in self.to_dict().items()
+        nominal, flown = FlownAircraft().to_dict(), self.to_dict()
+        entries = {key: value for key, value in flown.items()
                    if key not in ("coefficients", "sensor_bias") and value != nominal[key]}
         if self.coefficients:
             entries["coefficients"] = dict(self.coefficients)
-        bias = {key: value for key, value in self.to_dict()["sensor_bias"].items()
+        bias = {key: value for key, value in flown["sensor_bias"].items()
                 if value != nominal["sensor_bias"][key]}
         if bias:
             entries["sensor_bias"] = bias

@@ -38,7 +38,7 @@ from uav_fault_estimator.estimation.model_parameters import (
     model_parameter,
     values_of,
 )
-from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration
+from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration, white_share
 from uav_fault_estimator.estimation.prediction import AircraftPredictor
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
 from uav_fault_estimator.estimation.residuals import (
@@ -70,14 +70,12 @@ class SensorFlight:
 @dataclass(frozen=True)
 class FlightTerms:
     """One flight's normal equations at the current model: G (n, n) and h (n,) of
-    sum_k S_k^T W S_k and S_k^T W y_k, the weighted squared residual sum and its rows, and the
-    residuals (K, 6) per noise suite for the noise calibration."""
+    sum_k S_k^T W S_k and S_k^T W y_k, and the weighted squared residual sum and its rows."""
 
     gram: np.ndarray
     linear: np.ndarray
     chi_square: float
     rows: int
-    residuals: dict[str, np.ndarray]
 
 
 def model_file_sha256() -> str:
@@ -87,25 +85,22 @@ def model_file_sha256() -> str:
 
 def residual_weights(noise: NoiseCalibration) -> np.ndarray:
     """W (6,) [1 / residual unit²]: the air-data suite's inverse variances, each times its
-    AR(1) white equivalent (1 - rho) / (1 + rho)."""
+    AR(1) white equivalent (noise_model.white_share)."""
     suite = SUITES[WIND_AIR_DATA]
-    rho = np.clip(noise.correlations[suite], 0.0, 0.99)
-    return (1.0 - rho) / (1.0 + rho) / noise.variances[suite]
+    return white_share(noise.correlations[suite]) / noise.variances[suite]
 
 
 def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str],
                  residual_parameters: Mapping[str, Any], weights: np.ndarray) -> FlightTerms:
     """Run the flight through a residual generator whose models are `model` and whose columns
     are the named parameters' sensitivities [residual unit per parameter unit]; its normal
-    equations on residual_node's update grid (rows valid and plausible only), and the
-    residuals of the model itself, flying the air data and the filtered wind."""
+    equations on residual_node's update grid (rows valid and plausible only)."""
     parameters = [model_parameter(name) for name in names]
     generator = _generator(model, parameters, residual_parameters)
     n = len(parameters)
     gram, linear, chi_square, rows = np.zeros((n, n)), np.zeros(n), 0.0, 0
     order = [generator.column_names.index(p.name) for p in parameters]
     per_unit = np.array([_column_per_unit(p) for p in parameters])
-    air_data_rows = []
     for sample in _grid_samples(generator, flight, residual_parameters, flight.air_data):
         term = sample_normal_equations(sample.residual, sample.sensitivity[:, order] * per_unit,
                                        sample.valid, weights, n)
@@ -113,15 +108,22 @@ def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str
         linear += term.linear
         chi_square += float(term.whitened_y @ term.whitened_y)
         rows += int(np.count_nonzero(term.whitened_y))
-        if sample.wind_source == WIND_AIR_DATA:
-            air_data_rows.append(sample.residual)
-    # the other suite's noise from the same flights: the models on the filtered wind alone
-    filtered = [sample.residual for sample in _grid_samples(
-        _generator(model, (), residual_parameters), flight, residual_parameters,
-        np.full_like(flight.air_data, np.nan))]
-    residuals = {SUITES[WIND_AIR_DATA]: np.array(air_data_rows).reshape(-1, 6),
-                 SUITES[WIND_FILTERED]: np.array(filtered).reshape(-1, 6)}
-    return FlightTerms(gram, linear, chi_square, rows, residuals)
+    return FlightTerms(gram, linear, chi_square, rows)
+
+
+def noise_residuals(flight: SensorFlight, model: FlownAircraft,
+                    residual_parameters: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """The model's residuals (K, 6) per noise suite on the flight: the samples that flew the
+    air data, and the whole flight flown again on the filtered wind alone (the other suite's
+    noise from the same flight)."""
+    flown = {}
+    for suite, air_data in ((SUITES[WIND_AIR_DATA], flight.air_data),
+                            (SUITES[WIND_FILTERED], np.full_like(flight.air_data, np.nan))):
+        samples = _grid_samples(_generator(model, (), residual_parameters), flight,
+                                residual_parameters, air_data)
+        flown[suite] = np.array([s.residual for s in samples
+                                 if SUITES[s.wind_source] == suite]).reshape(-1, 6)
+    return flown
 
 
 def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
@@ -152,18 +154,13 @@ def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
         lambda changes: AircraftPredictor({}, propeller, changed(model, changes)),
         copies, SCALE_STEP_PCT, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
         sensor_bias=model.sensor_bias,
-        bias_steps={q.name: _bias_step(q) for q in parameters if q.is_bias})
-
-
-def _bias_step(parameter: ModelParameter) -> float:
-    """The secant step in SensorBias's own unit (a scale, or degrees)."""
-    return parameter.step / 100.0 if parameter.unit == "%" else parameter.step
+        bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias})
 
 
 def _column_per_unit(parameter: ModelParameter) -> float:
-    """What turns the generator's column into one per parameter unit: a bias's column is per
-    SensorBias unit (per unit scale, or per degree)."""
-    return 0.01 if parameter.is_bias and parameter.unit == "%" else 1.0
+    """What turns the generator's column into one per parameter unit: a model copy's is per
+    % already, a bias's per SensorBias unit (per unit scale, or per degree)."""
+    return parameter.native_per_unit if parameter.is_bias else 1.0
 
 
 @dataclass(frozen=True)
@@ -240,7 +237,13 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
         prior_std=np.array([p.prior_std for p in parameters]), posterior_std=deviation,
         correlations=covariance / np.outer(deviation, deviation), steps=step,
         reduced_chi_square=reduced,
-        residuals={suite: [t.residuals[suite] for t in final] for suite in SUITES.values()})
+        residuals=_per_suite(map_flights(_NoiseAt(model, residual_parameters), flights)))
+
+
+def _per_suite(flights: Iterable[dict[str, np.ndarray]]) -> dict[str, list[np.ndarray]]:
+    """Per suite, the flights' residuals."""
+    flights = list(flights)
+    return {suite: [flight[suite] for flight in flights] for suite in SUITES.values()}
 
 
 @dataclass(frozen=True)
@@ -255,6 +258,17 @@ class _TermsAt:
     def __call__(self, flight: SensorFlight) -> FlightTerms:
         return flight_terms(flight, self.model, self.names, self.residual_parameters,
                             self.weights)
+
+
+@dataclass(frozen=True)
+class _NoiseAt:
+    """noise_residuals at one model, as a picklable callable of the flight."""
+
+    model: FlownAircraft
+    residual_parameters: Mapping[str, Any]
+
+    def __call__(self, flight: SensorFlight) -> dict[str, np.ndarray]:
+        return noise_residuals(flight, self.model, self.residual_parameters)
 
 
 def _bounded_step(gram: np.ndarray, linear: np.ndarray, lower: np.ndarray,

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration
+from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration, white_share
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 
 ASSESSING, FITS, DOES_NOT_FIT, NOT_ASSESSED = "assessing", "fits", "does not fit", "not assessed"
@@ -70,10 +70,8 @@ class ModelFit:
         # per suite: 1/sigma and the AR(1) white-equivalent factor (1 - rho) / (1 + rho)
         self._whitening = {source: 1.0 / np.sqrt(noise.variances[suite])
                            for source, suite in SUITES.items()}
-        self._white_share = {
-            source: (1.0 - np.clip(noise.correlations[suite], 0.0, 0.99))
-            / (1.0 + np.clip(noise.correlations[suite], 0.0, 0.99))
-            for source, suite in SUITES.items()}
+        self._white_share = {source: white_share(noise.correlations[suite])
+                             for source, suite in SUITES.items()}
         self.reset()
 
     def reset(self) -> None:

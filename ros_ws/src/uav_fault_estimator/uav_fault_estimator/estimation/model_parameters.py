@@ -61,6 +61,12 @@ class ModelParameter:
     bounds: tuple[float, float]
 
     @property
+    def native_per_unit(self) -> float:
+        """The FlownAircraft field's change per unit of the parameter: a scale's per %, 0.01;
+        a bias's per degree, 1."""
+        return 0.01 if self.unit == "%" else 1.0
+
+    @property
     def is_bias(self) -> bool:
         """An air-data sensor's error (taken out of the air data, not a model copy's)."""
         return self.name in AIR_DATA_BIASES
@@ -94,7 +100,7 @@ def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircr
     bias: dict[str, float] = {}
     for name, change in changes.items():
         parameter = model_parameter(name)
-        step = float(change) / 100.0 if parameter.unit == "%" else float(change)
+        step = float(change) * parameter.native_per_unit
         if name in coefficient_names():
             coefficients[name] = coefficients.get(name, 1.0) + step
         elif name in INERTIA:
@@ -122,6 +128,7 @@ def values_of(aircraft: FlownAircraft, names: tuple[str, ...]) -> dict[str, floa
             value = getattr(aircraft.sensor_bias, name)
         else:
             value = getattr(aircraft, name)
-        # a scale is 1 in the nominal model, a bias 0
-        values[name] = 100.0 * (value - 1.0) if model_parameter(name).unit == "%" else value
+        parameter = model_parameter(name)
+        nominal = 1.0 if parameter.unit == "%" else 0.0  # a scale is 1 in the model, a bias 0
+        values[name] = (value - nominal) / parameter.native_per_unit
     return values

@@ -92,6 +92,13 @@ class SuiteNoise:
         return self.calibration.q_diag(wind_source, self.variance_factor)
 
 
+def white_share(correlations: np.ndarray) -> np.ndarray:
+    """Per channel, the AR(1) white equivalent (1 - rho) / (1 + rho) of a one-step
+    correlation rho (clipped to 0..0.99): the share of a sample that counts as independent."""
+    rho = np.clip(correlations, 0.0, 0.99)
+    return (1.0 - rho) / (1.0 + rho)
+
+
 def fit_noise(residuals: dict[str, list[np.ndarray]]) -> NoiseCalibration:
     """The calibration from, per suite name, a list of flights' residual sequences (K, 6):
     variances about zero and one-step correlations pooled over the flights."""
