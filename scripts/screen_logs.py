@@ -1,33 +1,45 @@
 #!/usr/bin/env python3
 """Screen flight logs with the self-tuning detector: calibrate it from fault-free logs of one
-airframe, then screen other logs of it for alarms (docs/detector.md).
+airframe, then screen other logs of it for alarms, against their ground truth where it is
+known (docs/flight_logs.md).
 
     python scripts/screen_logs.py calibrate FAULT_FREE_LOG... --airframe AIRFRAME.yaml \\
-        --out CAL.yaml [--schedule auto|airspeed|none]
+        --out CAL.yaml [--schedule auto|airspeed|none] [--generators roll,pitch,yaw]
+        [--truth TABLE.csv]
     python scripts/screen_logs.py screen LOG... --calibration CAL.yaml \\
-        --airframe AIRFRAME.yaml --out DIR [--false-alarm-probability 0.01]
+        --airframe AIRFRAME.yaml --out DIR [--false-alarm-probability 0.01] [--truth TABLE.csv]
 
-A LOG is a PX4 .ulg, a ROS 1 .bag, a ROS 2 bag folder or a folder of per-topic CSVs; any
-other folder stands for the logs directly in it (flight_logs.readers.log_paths). Each log
-is read with the airframe file's axes and outputs and put on the detector's grid
-(flight_logs.replay.load_replay); its warnings are printed once (each line names the log).
+A LOG is a PX4 .ulg, a ROS 1 .bag, a ROS 2 bag folder or a folder of per-topic CSVs (ALFA's
+flight folders among them); any other folder stands for the logs directly in it
+(flight_logs.readers.log_paths). Each log is read with the airframe file's axes and outputs
+and put on the detector's grid (flight_logs.replay.load_replay); its warnings are printed
+once (each line names the log).
 
-calibrate: self_tuning.calibrate over the logs with the airframe's name, on the grid of
+Ground truth (flight_logs.ground_truth): the --truth table's row of each log, else an ALFA
+flight folder's own failure_status files. calibrate learns from the fault-free part of each
+log with a known truth (a failure flight up to its onset less benchmark.ONSET_MARGIN_S), and
+from the whole of a log without one. screen holds each log with a known truth against it
+(flight_logs.evaluation): the table of outcomes and its summary are printed and written to
+summary.json, and the figure marks the onset.
+
+calibrate: calibration_fit.calibrate over the logs with the airframe's name and the named
+generators (detection.generators; default the paper's roll, pitch, yaw), on the grid of
 DEFAULT_SAMPLE_PERIOD_S, settling DEFAULT_SETTLE_S, with detector_node's window and
 forgetting factor (config/detector_node.yaml), so that detector_node takes the file too.
 --schedule auto (default): the parameters' means scheduled on airspeed when the logs'
-airspeeds span enough (self_tuning.MIN_SCHEDULE_SPAN_MPS), else a line saying why and no
+airspeeds span enough (calibration.MIN_SCHEDULE_SPAN_MPS), else a line saying why and no
 schedule; airspeed: a schedule or refuse; none: no schedule.
 
 screen: per log into DIR: NAME.alarms.csv (the alarm intervals: start_s, end_s, channel,
 test, samples; also printed), NAME.png (the figure), NAME.json (flight_logs.screening's
-summary), and DIR/summary.json (the calibration, the settings and every log's summary).
+summary, with the log's start stamp and, with a truth, its outcome), and DIR/summary.json
+(the calibration, the settings, every log's summary and, with truths, the evaluation).
 NAME is the log's file or folder name without its suffix.
 
 Exit status: 0 done; 2 bad input, one line (a missing or unreadable log, a folder without
-logs, two logs of one name, a bad airframe file, a calibration file that is malformed, for
-another airframe or for other detector settings, a schedule the logs cannot give, an output
-that cannot be written); 1 otherwise.
+logs, two logs of one name, a bad airframe file or truth table, a calibration file that is
+malformed, for another airframe or for other detector settings, a schedule the logs cannot
+give, unknown generators, an output that cannot be written); 1 otherwise.
 """
 
 from __future__ import annotations
@@ -38,6 +50,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 from uav_common.package_data import default_parameters
 from uav_fault_estimator.detection.calibration import (
@@ -48,7 +61,22 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_fault_estimator.flight_logs.airframe import Airframe, load_airframe
+from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
+from uav_fault_estimator.flight_logs.evaluation import (
+    OUTCOME_HEADING,
+    evaluation_summary,
+    flight_outcome,
+    outcome_dict,
+    outcome_line,
+    summary_line,
+)
+from uav_fault_estimator.flight_logs.ground_truth import (
+    FlightTruth,
+    flight_truth,
+    read_truth_table,
+)
 from uav_fault_estimator.flight_logs.readers import log_paths
 from uav_fault_estimator.flight_logs.replay import LogReplay, load_replay
 from uav_fault_estimator.flight_logs.screening import (
@@ -82,38 +110,65 @@ def airframe_of(path: Path) -> Airframe:
         raise BadInputError(str(error)) from None
 
 
-def load_logs(paths: Sequence[Path], airframe: Airframe,
-              period_s: float) -> dict[str, LogReplay]:
-    """Every log that paths name (folders expanded) on the grid of period_s [s], by name,
-    each log's warnings printed once; BadInputError for a log that cannot be read or used, or
-    two logs of one name (their outputs would overwrite each other)."""
-    logs: dict[str, LogReplay] = {}
+class LoadedLog(NamedTuple):
+    """A log on the grid and its ground truth (None: not known)."""
+
+    replay: LogReplay
+    truth: FlightTruth | None
+
+
+def load_logs(paths: Sequence[Path], airframe: Airframe, period_s: float,
+              truth_table: Path | None) -> dict[str, LoadedLog]:
+    """Every log that paths name (folders expanded) on the grid of period_s [s] with its
+    truth (the table's, else an ALFA folder's own), by name, each log's warnings printed
+    once; BadInputError for a log that cannot be read or used, a bad truth table, or two
+    logs of one name (their outputs would overwrite each other)."""
+    logs: dict[str, LoadedLog] = {}
     try:
+        table = None if truth_table is None else read_truth_table(truth_table)
         for path in log_paths(paths):
             name = path.stem
             if name in logs:
-                raise BadInputError(f"two logs named '{name}': {logs[name].source} and {path}; "
-                               "rename one or screen them separately")
-            logs[name] = load_replay(path, airframe.path, None, period_s)
-            for line in logs[name].inputs.warnings:  # each names its log
+                raise BadInputError(f"two logs named '{name}': {logs[name].replay.source} and "
+                                    f"{path}; rename one or screen them separately")
+            logs[name] = LoadedLog(load_replay(path, airframe.path, None, period_s),
+                                   flight_truth(path, name, table))
+            for line in logs[name].replay.inputs.warnings:  # each names its log
                 print(line)
     except ValueError as error:
         raise BadInputError(str(error)) from None
     return logs
 
 
+def generator_names(text: str) -> tuple[str, ...]:
+    """--generators: names separated by commas."""
+    return tuple(name.strip() for name in text.split(",") if name.strip())
+
+
 def calibrate_logs(arguments: argparse.Namespace) -> None:
     """The calibrate command: the calibration file from the fault-free logs."""
     started = time.monotonic()
     airframe = airframe_of(arguments.airframe)
-    logs = load_logs(arguments.logs, airframe, DEFAULT_SAMPLE_PERIOD_S)
+    logs = load_logs(arguments.logs, airframe, DEFAULT_SAMPLE_PERIOD_S, arguments.truth)
     node = detector_settings()
-    flights = [log.inputs.flight for log in logs.values()]
+    unlabelled = [name for name, log in logs.items()
+                  if log.truth is not None and not log.truth.labelled]
+    if unlabelled:
+        print(f"left out, unlabelled: {', '.join(unlabelled)}")
+    parts = [log.replay.inputs.flight if log.truth is None else
+             fault_free_part(LabelledFlight(name, log.replay.inputs, log.truth))
+             for name, log in logs.items() if name not in unlabelled]
+    flights = [part for part in parts if part is not None]
 
     def calibrated(scheduled: bool) -> Calibration:
-        return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
-                         node["window"], DEFAULT_SETTLE_S, airframe=airframe.name,
-                         scheduled=scheduled)
+        try:
+            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
+                             node["window"], DEFAULT_SETTLE_S, airframe=airframe.name,
+                             scheduled=scheduled, generators=arguments.generators)
+        except ValueError as error:
+            if "airspeed" in str(error):  # the schedule's: the caller decides
+                raise
+            raise BadInputError(str(error)) from None
 
     if arguments.schedule == "none":
         calibration = calibrated(False)
@@ -129,7 +184,7 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
           if calibration.scheduled else "airspeed schedule: none")
     header = (f"# Written by scripts/screen_logs.py calibrate for the airframe "
               f"'{airframe.name}' ({airframe.path}) from the fault-free logs\n"
-              + "".join(f"#   {log.source}\n" for log in logs.values())
+              + "".join(f"#   {log.replay.source}\n" for log in logs.values())
               + "# Valid for the sample period, forgetting factor and window below only.\n")
     try:
         write_calibration(arguments.out, header, calibration_to_dict(calibration),
@@ -151,18 +206,20 @@ def screen_logs(arguments: argparse.Namespace) -> None:
     except ValueError as error:
         raise BadInputError(str(error)) from None
     period_s = calibration.sample_period_s
-    logs = load_logs(arguments.logs, airframe, period_s)
+    channels = calibration.channel_names
+    logs = load_logs(arguments.logs, airframe, period_s, arguments.truth)
     out = arguments.out
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         raise BadInputError(f"cannot write into {out}: {error.strerror}") from None
-    summaries = []
-    for name, log in logs.items():
-        samples = run_detector(calibration, log.inputs.flight,
-                               arguments.false_alarm_probability)
-        intervals = alarm_intervals(samples, period_s)
-        summary = log_summary(name, log.source, samples, period_s, log.inputs.warnings)
+    summaries, outcomes = [], []
+    for name, (log, truth) in logs.items():
+        inputs = log.inputs
+        samples = run_detector(calibration, inputs.flight, arguments.false_alarm_probability)
+        intervals = alarm_intervals(samples, channels, period_s)
+        summary = log_summary(name, log.source, samples, channels, period_s, inputs.warnings,
+                              inputs.start_stamp_s)
         counts = summary["alarm_samples"]
         print(f"{name}: {summary['samples']} samples, {summary['tested_samples']} tested; "
               "alarm samples glrt {}, parameter {}, combined {}; first combined alarm {}"
@@ -170,19 +227,34 @@ def screen_logs(arguments: argparse.Namespace) -> None:
                       "none" if summary["first_combined_alarm_s"] is None
                       else f"at {summary['first_combined_alarm_s']:.1f} s"))
         print(alarm_table(intervals))
+        onset_s = None
+        if truth is not None and truth.labelled:
+            outcome = flight_outcome(name, truth, samples, channels, inputs.start_stamp_s)
+            summary["outcome"] = outcome_dict(outcome)
+            outcomes.append(outcome)
+            if truth.onset_stamp_s is not None:
+                onset_s = truth.onset_stamp_s - inputs.start_stamp_s
         write_alarm_csv(out / f"{name}.alarms.csv", intervals)
         plot_screening(f"{name}: designed P_FA {arguments.false_alarm_probability:g} per "
-                       "sample and test", log.inputs, samples, intervals, period_s,
-                       out / f"{name}.png")
+                       "sample and test", inputs, samples, channels, intervals, period_s,
+                       out / f"{name}.png", onset_s)
         (out / f"{name}.json").write_text(json.dumps(summary, indent=2) + "\n")
         summaries.append(summary)
+    evaluation = None
+    if outcomes:
+        evaluation = evaluation_summary(outcomes)
+        print(OUTCOME_HEADING)
+        print("\n".join(map(outcome_line, outcomes)))
+        print(summary_line(evaluation))
     (out / "summary.json").write_text(json.dumps({
         "calibration": str(arguments.calibration),
         "airframe": airframe.name,
+        "channels": list(channels),
         "airspeed_schedule": calibration.scheduled,
         "sample_period_s": period_s,
         "false_alarm_probability": arguments.false_alarm_probability,
         "logs": summaries,
+        "evaluation": evaluation,
     }, indent=2) + "\n")
     print(f"screened {len(summaries)} logs into {out}")
 
@@ -197,6 +269,12 @@ def parser() -> argparse.ArgumentParser:
     calibrate_command.add_argument("--out", type=Path, required=True,
                                    help="the calibration file to write")
     calibrate_command.add_argument("--schedule", choices=SCHEDULES, default="auto")
+    calibrate_command.add_argument("--generators", type=generator_names,
+                                   default=SURFACE_GENERATORS,
+                                   help="comma-separated (default roll,pitch,yaw)")
+    calibrate_command.add_argument("--truth", type=Path, default=None,
+                                   help="truth table: a failure log's part from its onset "
+                                        "on is left out")
     calibrate_command.set_defaults(run=calibrate_logs)
     screen_command = commands.add_parser("screen", help="screen logs for alarms")
     screen_command.add_argument("logs", type=Path, nargs="+", metavar="LOG")
@@ -206,6 +284,9 @@ def parser() -> argparse.ArgumentParser:
                                 help="the folder for the tables, figures and summaries")
     screen_command.add_argument("--false-alarm-probability", type=float, default=0.01,
                                 help="designed per sample and test (default 0.01)")
+    screen_command.add_argument("--truth", type=Path, default=None,
+                                help="truth table (log,failure,onset_stamp_s); without it "
+                                     "ALFA folders' own failure_status files")
     screen_command.set_defaults(run=screen_logs)
     return top
 

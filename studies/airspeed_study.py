@@ -11,18 +11,18 @@ from collections.abc import Sequence
 
 import numpy as np
 from uav_fault_estimator.detection.calibration import (
-    CHANNELS,
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
     Calibration,
 )
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_fault_estimator.offline import fault_free_flights
 from uav_sim.scenario import Scenario
 
 # The tests whose rates are measured, in the order of rates()' values.
-TESTS = (*(f"glrt_{name}" for name in CHANNELS), "parameters", "combined")
+TESTS = (*(f"glrt_{name}" for name in SURFACE_GENERATORS), "parameters", "combined")
 CALIBRATIONS = ("one_airspeed", "unscheduled", "scheduled")  # compared_calibrations' keys
 
 
@@ -50,7 +50,8 @@ def rates(calibration: Calibration, flight: DetectorFlight,
     samples = [sample for sample in run_detector(calibration, flight, false_alarm_probability)
                if np.isfinite(sample.statistic).all()]
     glrt = np.array([sample.alarm for sample in samples]).mean(axis=0)
-    return {**{f"glrt_{name}": float(rate) for name, rate in zip(CHANNELS, glrt, strict=True)},
+    return {**{f"glrt_{name}": float(rate)
+               for name, rate in zip(SURFACE_GENERATORS, glrt, strict=True)},
             "parameters": float(np.mean([sample.parameter_alarm for sample in samples])),
             "combined": float(np.mean([sample.combined_alarm for sample in samples]))}
 

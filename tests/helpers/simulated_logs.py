@@ -259,7 +259,9 @@ def write_mavros_bag(path: Path, truth: LogTruth, seed: int) -> float:
     (its first log time) in seconds of simulation time, from which a reader counts."""
     typestore = mavros_ros1_typestore()
     types = typestore.types
-    topic = {meaning: name for name, meaning in MAVROS_TOPICS.items()}
+    topic: dict[str, str] = {}  # each meaning's first topic (imu/data before imu/data_raw)
+    for name, meaning in MAVROS_TOPICS.items():
+        topic.setdefault(meaning, name)
     streams = truth.streams
     rng = np.random.default_rng(seed)
 
@@ -355,27 +357,30 @@ def write_project_bag(path: Path, truth: LogTruth) -> None:
 
 # ---- per-topic CSV export ------------------------------------------------------------------
 
-ROSTOPIC, DOTTED = "rostopic", "dotted"  # the two CSV layouts (csv_logs.py)
+ROSTOPIC, DOTTED, ALFA = "rostopic", "dotted", "alfa"  # the CSV layouts (csv_logs.py)
 
 
 def export_csv(bag: Path, folder: Path, layout: str) -> None:
     """A bag's topics as per-topic CSV files in folder, as exporters write them. ROSTOPIC:
     rostopic echo -p (_mavros_imu_data.csv; "%time" [ns], "field." prefixes, stamps one
     column [ns], arrays one column an element: channels0). DOTTED: mavros-imu-data.csv;
-    "time" [s], "." prefixes, stamps secs and nsecs, arrays one column of a list."""
+    "time" [s], "." prefixes, stamps secs and nsecs, arrays one column of a list. ALFA:
+    ROSTOPIC's columns in ALFA's processed layout, FOLDER-mavros-imu-data.csv."""
     folder.mkdir(parents=True, exist_ok=True)
     rows: dict[str, list[dict[str, str]]] = {}
     with AnyReader([bag]) as reader:
         for connection, time_ns, raw in reader.messages():
             message = reader.deserialize(raw, connection.msgtype)
-            row = {"%time" if layout == ROSTOPIC else "time":
-                   str(time_ns) if layout == ROSTOPIC else repr(time_ns * 1e-9)}
-            prefix = "field." if layout == ROSTOPIC else "."
-            row.update((prefix + name, value) for name, value in _flat(message, layout))
+            columns = ROSTOPIC if layout == ALFA else layout
+            row = {"%time" if columns == ROSTOPIC else "time":
+                   str(time_ns) if columns == ROSTOPIC else repr(time_ns * 1e-9)}
+            prefix = "field." if columns == ROSTOPIC else "."
+            row.update((prefix + name, value) for name, value in _flat(message, columns))
             rows.setdefault(connection.topic, []).append(row)
     for topic, topic_rows in rows.items():
-        name = (topic.replace("/", "_") if layout == ROSTOPIC
-                else topic.strip("/").replace("/", "-"))
+        name = {ROSTOPIC: topic.replace("/", "_"),
+                DOTTED: topic.strip("/").replace("/", "-"),
+                ALFA: f"{folder.name}-" + topic.strip("/").replace("/", "-")}[layout]
         with (folder / f"{name}.csv").open("w", newline="") as file:
             writer = csv.DictWriter(file, fieldnames=list(topic_rows[0]))
             writer.writeheader()

@@ -20,16 +20,17 @@ import pytest
 import yaml
 from helpers.repo import REPO_ROOT
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.detection.calibration import CHANNELS, Calibration
+from uav_fault_estimator.detection.calibration import Calibration
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_fault_estimator.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 
 NODE_DEFAULTS = default_parameters("uav_fault_estimator", "detector_node.yaml")
 P_FA = NODE_DEFAULTS["false_alarm_probability"]
-TESTS = (*CHANNELS, "parameters", "combined")
+TESTS = (*SURFACE_GENERATORS, "parameters", "combined")
 ONSET_S = 150.0  # aileron_loss.yaml
 
 

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 from scipy import stats
-from uav_fault_estimator.detection.calibration import CHANNELS, Calibration, ChannelCalibration
+from uav_fault_estimator.detection.calibration import Calibration, ChannelCalibration
 from uav_fault_estimator.detection.calibration_file import (
     calibration_from_dict,
     calibration_to_dict,
@@ -22,6 +22,7 @@ from uav_fault_estimator.detection.change_detection import (
     weibull_threshold,
 )
 from uav_fault_estimator.detection.detector import SelfTuningDetector
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 
 
@@ -130,12 +131,12 @@ def test_detector_skips_non_finite_samples_and_keeps_its_parameters():
     assert detector.update(0.0, state, controls) is None  # the first: no r[k-1] yet
     assert detector.update(0.1, state, controls) is None  # off the 0.2 s grid
     sample = detector.update(0.2, state, controls)
-    assert sample is not None and list(sample.theta) == list(CHANNELS)
+    assert sample is not None and list(sample.theta) == list(SURFACE_GENERATORS)
     assert np.isnan(sample.statistic).all()  # not settled yet
     theta = {name: rls.theta.copy() for name, rls in detector.rls.items()}
     state[9] = math.nan  # roll rate lost
     assert detector.update(0.4, state, controls) is None
-    assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in CHANNELS)
+    assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in SURFACE_GENERATORS)
 
 
 @pytest.mark.timeout(30)
@@ -148,6 +149,6 @@ def test_a_new_false_alarm_probability_moves_the_thresholds_and_keeps_the_genera
     detector.set_false_alarm_probability(1e-4)
     assert detector.thresholds == pytest.approx([2.0 * (-math.log(1e-4)) ** (1 / 1.5)] * 3)
     assert detector.parameter_threshold == pytest.approx(1.5 * (-math.log(1e-4)) ** (1 / 2.5))
-    assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in CHANNELS)
+    assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in SURFACE_GENERATORS)
     sample = detector.update(1.0, state, controls)
     assert sample is not None and sample.threshold == pytest.approx(detector.thresholds)

@@ -22,6 +22,7 @@ from uav_fault_estimator.flight_logs.screening import (
 )
 
 PERIOD_S = 0.2
+CHANNELS = ("roll", "pitch", "yaw")  # the shipped calibration's generators
 THRESHOLD = 10.0  # every test's, in these samples
 
 
@@ -63,7 +64,7 @@ def test_runs_follow_one_period_apart() -> None:
 
 @pytest.mark.timeout(10)
 def test_intervals_per_test_and_channel() -> None:
-    assert alarm_intervals(SAMPLES, PERIOD_S) == [
+    assert alarm_intervals(SAMPLES, CHANNELS, PERIOD_S) == [
         AlarmInterval(0.4, 1.0, "roll", "glrt", 4),
         AlarmInterval(0.6, 0.6, "roll", "parameter", 1),
         AlarmInterval(0.6, 0.6, "roll", "combined", 1),
@@ -79,7 +80,8 @@ def test_intervals_per_test_and_channel() -> None:
 
 @pytest.mark.timeout(10)
 def test_summary_counts_and_first_alarm() -> None:
-    summary = log_summary("flight", "/logs/flight.ulg", SAMPLES, PERIOD_S, ("a warning",))
+    summary = log_summary("flight", "/logs/flight.ulg", SAMPLES, CHANNELS, PERIOD_S,
+                          ("a warning",), 0.0)
     assert json.loads(json.dumps(summary)) == summary  # JSON as it is
     assert (summary["samples"], summary["tested_samples"]) == (8, 7)
     assert summary["alarm_samples"] == {
@@ -93,13 +95,13 @@ def test_summary_counts_and_first_alarm() -> None:
     assert summary["intervals"][0] == {"start_s": 0.4, "end_s": 1.0, "channel": "roll",
                                        "test": "glrt", "samples": 4}
     assert summary["warnings"] == ["a warning"]
-    quiet = log_summary("quiet", "q.ulg", SAMPLES[:2], PERIOD_S, ())
+    quiet = log_summary("quiet", "q.ulg", SAMPLES[:2], CHANNELS, PERIOD_S, (), 0.0)
     assert (quiet["first_combined_alarm_s"], quiet["intervals"]) == (None, [])
 
 
 @pytest.mark.timeout(10)
 def test_table_and_csv(tmp_path: Path) -> None:
-    intervals = alarm_intervals(SAMPLES, PERIOD_S)
+    intervals = alarm_intervals(SAMPLES, CHANNELS, PERIOD_S)
     lines = alarm_table(intervals).splitlines()
     assert lines[0].split() == list(TABLE_COLUMNS)
     assert lines[1].split() == ["0.4", "1.0", "roll", "glrt", "4"]

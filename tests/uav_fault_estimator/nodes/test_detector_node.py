@@ -11,9 +11,9 @@ import pytest
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.detection.calibration import CHANNELS
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import SelfTuningDetector, run_detector
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_fault_estimator.offline import fly_on_grid
 from uav_fault_msgs.msg import FaultAlarm
 from uav_sim.scenario import load_scenario
@@ -38,7 +38,7 @@ def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, st
 
     stamps = np.array([stamp_seconds(m.header.stamp) for m in alarms])
     np.testing.assert_allclose(stamps, 0.2 * np.arange(1, expected + 1), atol=1e-9)
-    assert all(list(m.channel_names) == list(CHANNELS) for m in alarms)
+    assert all(list(m.channel_names) == list(SURFACE_GENERATORS) for m in alarms)
     # the same numbers as the core's offline run of the same flight
     calibration = load_calibration("", window=25, forgetting_factor=0.995)
     offline = run_detector(calibration, fly_on_grid(load_scenario(scenario), 0.2)[:3], 0.01)

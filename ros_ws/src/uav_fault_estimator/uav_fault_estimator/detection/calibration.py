@@ -20,12 +20,6 @@ import numpy as np
 
 from uav_fault_estimator.detection.change_detection import Weibull
 
-CHANNELS = ("roll", "pitch", "yaw")
-PARAMETER_NAMES = {
-    "roll": ("a_pa", "b_pa"),
-    "pitch": ("a_qe", "b_qe"),
-    "yaw": ("a_ra", "b_ra", "c_ra"),
-}
 DEFAULT_SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz: the grid of every calibration made here
 DEFAULT_SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
 # The airframe of the shipped calibration: the simulated Aerosonde
@@ -66,7 +60,7 @@ class Calibration:
     forgetting_factor: float
     window: int
     settle_s: float  # after a (re)start, no test until the RLS has had this long
-    channels: Mapping[str, ChannelCalibration]
+    channels: Mapping[str, ChannelCalibration]  # by generator name (generators.GENERATORS)
     parameter: Weibull  # of the largest normalised parameter deviation over the channels
     airframe: str = SIMULATED_AIRFRAME
     reference_airspeed_mps: float | None = None  # U_ref of the airspeed schedule; None: none
@@ -74,6 +68,11 @@ class Calibration:
     @property
     def scheduled(self) -> bool:
         return self.reference_airspeed_mps is not None
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """The generators (generators.GENERATORS) the calibration holds, in its order."""
+        return tuple(self.channels)
 
 
 

@@ -14,13 +14,12 @@ import yaml
 from uav_common.package_data import config_path
 
 from uav_fault_estimator.detection.calibration import (
-    CHANNELS,
-    PARAMETER_NAMES,
     SIMULATED_AIRFRAME,
     Calibration,
     ChannelCalibration,
 )
 from uav_fault_estimator.detection.change_detection import Weibull
+from uav_fault_estimator.detection.generators import GENERATORS, checked_generators
 
 CALIBRATION_FILE = "detector_calibration.yaml"  # in the package's config/
 
@@ -36,7 +35,7 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
         "settle_s": calibration.settle_s,
         "parameter_deviation_weibull": _weibull_dict(calibration.parameter),
         "channels": {name: {
-            "parameters": list(PARAMETER_NAMES[name]),
+            "parameters": list(GENERATORS[name].parameters),
             "theta0": c.theta0.tolist(), "p0": c.p0.tolist(),
             "parameter_mean": c.parameter_mean.tolist(),
             "parameter_std": c.parameter_std.tolist(),
@@ -51,9 +50,12 @@ def calibration_from_dict(data: Mapping[str, Any]) -> Calibration:
     """From calibration_to_dict's layout; KeyError or ValueError on a malformed one."""
     reference = data["reference_airspeed_mps"]
     channels = {}
-    for name in CHANNELS:
+    for name in checked_generators(tuple(data["channels"])):
         c = data["channels"][name]
-        n = len(PARAMETER_NAMES[name])
+        n = len(GENERATORS[name].parameters)
+        if list(c["parameters"]) != list(GENERATORS[name].parameters):
+            raise ValueError(f"channel {name}: parameters must be "
+                             f"{', '.join(GENERATORS[name].parameters)}")
         arrays = [np.array(c[key], dtype=float) for key in
                   ("theta0", "p0", "parameter_mean", "parameter_std")]
         slope = c["parameter_slope_per_mps"]

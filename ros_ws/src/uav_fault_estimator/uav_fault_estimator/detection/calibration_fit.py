@@ -10,7 +10,6 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from uav_fault_estimator.detection.calibration import (
-    CHANNELS,
     MIN_SCHEDULE_SPAN_MPS,
     SIMULATED_AIRFRAME,
     Calibration,
@@ -22,29 +21,33 @@ from uav_fault_estimator.detection.change_detection import (
     weibull_fit,
 )
 from uav_fault_estimator.detection.detector import (
-    YAW_RATE,
+    DetectorFlight,
     detector_flight,
-    regressions,
+    flight_regressions,
     run_detector,
 )
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, checked_generators
 
 
-def fit_initial_parameters(flights: Iterable[tuple[np.ndarray, np.ndarray]],
-                           forgetting_factor: float) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """theta0 and P0 per channel from flights given as (states (K, n), controls (K, m)) on
-    the sample grid: theta0 the least-squares fit over all their samples, P0 the RLS
-    covariance it settles to on such data, (1 - lambda_f) (Phiᵀ Phi / K)^-1."""
-    rows: dict[str, list] = {name: [] for name in CHANNELS}
-    targets: dict[str, list] = {name: [] for name in CHANNELS}
-    for states, controls in flights:
-        for k in range(1, len(states)):
-            for name, (phi, y) in regressions(states[k], controls[k],
-                                               states[k - 1, YAW_RATE]).items():
+def fit_initial_parameters(flights: Iterable[DetectorFlight], generators: tuple[str, ...],
+                           sample_period_s: float, forgetting_factor: float
+                           ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """theta0 and P0 per generator from flights on the sample grid: theta0 the least-squares
+    fit over every sample the detector would use, P0 the RLS covariance it settles to on
+    such data, (1 - lambda_f) (Phiᵀ Phi / K)^-1."""
+    rows: dict[str, list] = {name: [] for name in generators}
+    targets: dict[str, list] = {name: [] for name in generators}
+    for flight in flights:
+        for regression in flight_regressions(flight, generators, sample_period_s):
+            for name, (phi, y) in regression.items():
                 rows[name].append(phi)
                 targets[name].append(y)
     fitted = {}
-    for name in CHANNELS:
+    for name in generators:
         phi, y = np.array(rows[name]), np.array(targets[name])
+        if phi.ndim != 2 or len(y) <= phi.shape[1]:
+            raise ValueError(f"generator {name}: {len(y)} usable fault-free samples, too few "
+                             "to fit it (does every flight carry what it takes?)")
         theta0, *_ = np.linalg.lstsq(phi, y, rcond=None)
         p0 = (1.0 - forgetting_factor) * np.linalg.inv(phi.T @ phi / len(y))
         fitted[name] = (theta0, p0)
@@ -53,16 +56,18 @@ def fit_initial_parameters(flights: Iterable[tuple[np.ndarray, np.ndarray]],
 
 def calibrate(flights: Sequence[Sequence[np.ndarray]], sample_period_s: float,
               forgetting_factor: float, window: int, settle_s: float,
-              airframe: str = SIMULATED_AIRFRAME, scheduled: bool = False) -> Calibration:
-    """The calibration of airframe from fault-free flights on the sample grid
-    (DetectorFlight, or (times, states, controls) without airspeed): the initial
-    parameters, then, from the RLS and GLRT run over each flight from them, the parameters'
-    spread and the Weibull fits of both statistics. scheduled: the parameters' means affine
-    in the filtered airspeed (airspeed_schedule); ValueError when the flights' airspeeds
-    span less than MIN_SCHEDULE_SPAN_MPS."""
+              airframe: str = SIMULATED_AIRFRAME, scheduled: bool = False,
+              generators: tuple[str, ...] = SURFACE_GENERATORS) -> Calibration:
+    """The calibration of airframe's generators (generators.GENERATORS) from fault-free
+    flights on the sample grid (DetectorFlight, or (times, states, controls) without
+    airspeed): the initial parameters, then, from the RLS and GLRT run over each flight from
+    them, the parameters' spread and the Weibull fits of both statistics. scheduled: the
+    parameters' means affine in the filtered airspeed (airspeed_schedule); ValueError when
+    the flights' airspeeds span less than MIN_SCHEDULE_SPAN_MPS, or a generator has too few
+    samples."""
+    generators = checked_generators(tuple(generators))
     flights = [detector_flight(flight) for flight in flights]
-    initial = fit_initial_parameters([(f.states, f.controls) for f in flights],
-                                     forgetting_factor)
+    initial = fit_initial_parameters(flights, generators, sample_period_s, forgetting_factor)
     # The RLS and the GLRT need only theta0 and P0; spread and Weibulls are placeholders.
     provisional = Calibration(sample_period_s, forgetting_factor, window, settle_s, {
         name: ChannelCalibration(theta0, p0, np.zeros(theta0.size), np.ones(theta0.size),
@@ -75,7 +80,7 @@ def calibrate(flights: Sequence[Sequence[np.ndarray]], sample_period_s: float,
     airspeeds = np.array([sample.airspeed_mps for sample in samples])
     reference = airspeed_reference(airspeeds) if scheduled else None
     channels, deviation = {}, np.zeros(len(samples))
-    for k, name in enumerate(CHANNELS):
+    for k, name in enumerate(generators):
         theta = np.array([sample.theta[name] for sample in samples])
         mean, slope, std = (airspeed_schedule(theta, airspeeds - reference) if scheduled
                             else (theta.mean(axis=0), None, theta.std(axis=0)))

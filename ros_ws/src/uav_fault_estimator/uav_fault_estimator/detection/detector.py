@@ -1,16 +1,11 @@
-"""Self-tuning residual generators and the combined alarm (Blanke & Hansen).
+"""The self-tuning detector and its combined alarm (Blanke & Hansen).
 
-Three generic models, each identified in flight by recursive least squares (rls.py) from
-parameters learned on earlier fault-free flights (the calibration):
-
-    roll   p[k] = a_pa da[k] + b_pa                    (eq. 2, residual eq. 12)
-    pitch  q[k] = a_qe de[k] + b_qe                    (eq. 3, residual eq. 13)
-    yaw    r[k] = a_ra da[k] + b_ra r[k-1] + c_ra      (eq. 4, residual eq. 14)
-
-p, q, r body rates [rad/s], da aileron, de elevator [rad], sampled every sample_period_s
-(the paper's 5 Hz). Per channel, on every sample: the residual is the RLS prediction error
-(eq. 9), its GLRT statistic over the last M samples (change_detection.py, eq. 22) against
-the threshold for the designed false-alarm probability (eq. 25, Weibull of the statistic on
+Residual generators (generators.py), each identified in flight by recursive least squares
+(rls.py) from parameters learned on earlier fault-free flights (the calibration, which names
+the generators it holds). Per generator (the detector's channel), on every sample of the
+grid (sample_period_s, the paper's 5 Hz): the residual is the RLS prediction error (eq. 9),
+its GLRT statistic over the last M samples (change_detection.py, eq. 22) against the
+threshold for the designed false-alarm probability (eq. 25, Weibull of the statistic on
 fault-free flights), and the parameter deviation: the largest |theta_i - mean_i| / std_i
 against the fault-free spread (section III.C), whose threshold comes from a Weibull fit of
 the same statistic on the same flights, for the same P_FA. The combined alarm (section
@@ -22,33 +17,35 @@ The calibration it runs on: calibration.py. No ROS here.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_common.sample_grid import on_grid
 
-from uav_fault_estimator.detection.calibration import CHANNELS, Calibration, parameter_deviation
+from uav_fault_estimator.detection.calibration import Calibration, parameter_deviation
 from uav_fault_estimator.detection.change_detection import (
     SlidingGlrt,
     weibull_threshold,
 )
+from uav_fault_estimator.detection.generators import GridSample, Regression, regressions
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 
-_P, _Q, YAW_RATE = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
-_AILERON, _ELEVATOR = (CONTROL_CHANNELS.index(name) for name in ("aileron", "elevator"))
+NO_SETPOINT = np.full(2, math.nan)
+
 
 class DetectorFlight(NamedTuple):
     """One flight on the detector's grid: times_s (K,) [s], states (K, 14) and controls
     (K, 7) in uav_common.channels order, airspeed_mps (K,) [m/s] (NaN where unknown; only an
-    airspeed schedule needs it)."""
+    airspeed schedule needs it), attitude_setpoint_rad (K, 2) the autopilot's commanded roll
+    and pitch [rad] (None or NaN where unknown)."""
 
     times_s: np.ndarray
     states: np.ndarray
     controls: np.ndarray
     airspeed_mps: np.ndarray
+    attitude_setpoint_rad: np.ndarray | None = None
 
 
 def detector_flight(flight: Sequence[np.ndarray]) -> DetectorFlight:
@@ -59,21 +56,9 @@ def detector_flight(flight: Sequence[np.ndarray]) -> DetectorFlight:
     return DetectorFlight(times_s, states, controls, np.full(len(times_s), math.nan))
 
 
-def regressions(state: np.ndarray, controls: np.ndarray,
-                previous_yaw_rate: float) -> dict[str, tuple[np.ndarray, float]]:
-    """(phi, y) of each generator (eq. 5-8) from one state and controls sample."""
-    aileron, elevator = controls[_AILERON], controls[_ELEVATOR]
-    return {
-        "roll": (np.array([aileron, 1.0]), state[_P]),
-        "pitch": (np.array([elevator, 1.0]), state[_Q]),
-        "yaw": (np.array([aileron, previous_yaw_rate, 1.0]), state[YAW_RATE]),
-    }
-
-
-
 @dataclass(frozen=True)
 class DetectorSample:
-    """One detector step: per channel (CHANNELS order) residual, GLRT statistic (NaN while
+    """One detector step: per channel (the calibration's order) residual, GLRT statistic (NaN while
     the window fills or the RLS settles), threshold, alarm and parameter deviation; the
     parameter threshold and alarm; the combined alarm; each channel's parameters."""
 
@@ -90,15 +75,70 @@ class DetectorSample:
     airspeed_mps: float  # the filtered airspeed the schedule used (NaN: none known)
 
 
+class RegressionFeed:
+    """The samples of a flight as the generators' regressions, on the grid of period_s [s]:
+    which samples can be used, and each one's sample before."""
+
+    def __init__(self, generators: tuple[str, ...], period_s: float) -> None:
+        self.generators = generators
+        self.period_s = period_s
+        self.skipped_samples = 0  # samples on the grid that could not be used
+        self.restart()
+
+    def restart(self) -> None:
+        """From a start: no sample before, not started; the count of skipped samples kept."""
+        self.previous: GridSample | None = None
+        self.started_s: float | None = None  # the first usable sample's time [s]
+
+    def step(self, time_s: float, state: np.ndarray, controls: np.ndarray,
+             airspeed_mps: float, setpoint_rad: np.ndarray) -> dict[str, Regression] | None:
+        """Each generator's (phi, y) for this sample; None off the grid, for the first
+        sample when a generator needs the sample before, and for a sample with a non-finite
+        value a generator takes (then the next sample has no sample before)."""
+        if not on_grid(time_s, self.period_s):
+            return None
+        now = GridSample(state, controls, airspeed_mps, setpoint_rad, self.period_s)
+        regression = regressions(self.generators, now, self.previous)
+        if regression is None:
+            self.skipped_samples += 1
+            # Only the sample before is missing when, given itself as the one before, this
+            # sample is complete: it is then the next sample's sample before.
+            first = self.previous is None and regressions(self.generators, now, now) is not None
+            self.previous = now if first else None
+        else:
+            self.previous = now
+        if self.previous is not None and self.started_s is None:
+            self.started_s = time_s
+        return regression
+
+
+def flight_regressions(flight: Sequence[np.ndarray], generators: tuple[str, ...],
+                       period_s: float) -> Iterator[dict[str, Regression]]:
+    """Every usable sample's regressions over one flight (DetectorFlight, or (times, states,
+    controls) without airspeed), as the detector forms them."""
+    feed = RegressionFeed(generators, period_s)
+    for sample in flight_samples(flight):
+        regression = feed.step(*sample)
+        if regression is not None:
+            yield regression
+
+
+def flight_samples(flight: Sequence[np.ndarray]) -> Iterator[tuple]:
+    """(time_s, state, controls, airspeed_mps, setpoint_rad) of each sample of a flight."""
+    flight = detector_flight(flight)
+    setpoints = (np.full((len(flight.times_s), 2), math.nan)
+                 if flight.attitude_setpoint_rad is None else flight.attitude_setpoint_rad)
+    yield from zip(*flight[:4], setpoints, strict=True)
+
+
 class SelfTuningDetector:
-    """Feed it every state/controls sample; it acts on the calibration's sample grid."""
+    """Feed it every sample; it acts on the calibration's sample grid, with the generators
+    the calibration names."""
 
     def __init__(self, calibration: Calibration, false_alarm_probability: float) -> None:
         self.calibration = calibration
         self.set_false_alarm_probability(false_alarm_probability)
-        # Samples on the grid that could not be used (the first after a reset; a rate or
-        # surface missing), over the detector's life.
-        self.skipped_samples = 0
+        self.feed = RegressionFeed(calibration.channel_names, calibration.sample_period_s)
         self.reset()
 
     def set_false_alarm_probability(self, false_alarm_probability: float) -> None:
@@ -106,21 +146,25 @@ class SelfTuningDetector:
         (eq. 25), from the next sample on; the generators' state is kept."""
         calibration = self.calibration
         self.false_alarm_probability = false_alarm_probability
-        self.thresholds = np.array([weibull_threshold(calibration.channels[c].glrt,
-                                                      false_alarm_probability)
-                                    for c in CHANNELS])
+        self.thresholds = np.array([weibull_threshold(channel.glrt, false_alarm_probability)
+                                    for channel in calibration.channels.values()])
         self.parameter_threshold = weibull_threshold(calibration.parameter,
                                                      false_alarm_probability)
 
     def reset(self) -> None:
-        """Back to the calibration's parameters: after a restart of the source."""
+        """Back to the calibration's parameters: after a restart of the source. The count
+        of skipped samples is kept."""
         c = self.calibration
-        self.rls = {name: RecursiveLeastSquares(c.channels[name].theta0, c.channels[name].p0,
-                                                c.forgetting_factor) for name in CHANNELS}
-        self.glrt = {name: SlidingGlrt(c.window) for name in CHANNELS}
-        self.previous_yaw_rate: float | None = None
-        self.started_s: float | None = None
+        self.feed.restart()
+        self.rls = {name: RecursiveLeastSquares(channel.theta0, channel.p0, c.forgetting_factor)
+                    for name, channel in c.channels.items()}
+        self.glrt = {name: SlidingGlrt(c.window) for name in c.channels}
         self.filtered_airspeed_mps = math.nan
+
+    @property
+    def skipped_samples(self) -> int:
+        """Samples on the grid that could not be used, over the detector's life."""
+        return self.feed.skipped_samples
 
     def filter_airspeed(self, airspeed_mps: float) -> float:
         """The airspeed through the RLS's forgetting (the memory its parameters have); the
@@ -134,32 +178,22 @@ class SelfTuningDetector:
         return self.filtered_airspeed_mps
 
     def update(self, time_s: float, state: np.ndarray, controls: np.ndarray,
-               airspeed_mps: float = math.nan) -> DetectorSample | None:
+               airspeed_mps: float = math.nan,
+               setpoint_rad: np.ndarray = NO_SETPOINT) -> DetectorSample | None:
         """One sample (state and controls arrays, uav_common.channels order; the airspeed
-        [m/s], which only an airspeed schedule uses: without one known yet, no parameter
-        test). None off the grid, for the first sample (the yaw model needs r[k-1]), and for
-        a sample with a non-finite value it needs (skipped: the RLS keeps its parameters)."""
-        if not on_grid(time_s, self.calibration.sample_period_s):
-            return None
-        rates = state[[_P, _Q, YAW_RATE]]
-        surfaces = controls[[_AILERON, _ELEVATOR]]
-        if not (np.all(np.isfinite(rates)) and np.all(np.isfinite(surfaces))):
-            self.skipped_samples += 1
-            self.previous_yaw_rate = None  # r[k-1] of the next sample is not known either
-            return None
-        previous, self.previous_yaw_rate = self.previous_yaw_rate, float(state[YAW_RATE])
-        if previous is None:  # the first sample, or the first after a gap
-            if self.started_s is None:
-                self.started_s = time_s
-            self.skipped_samples += 1
+        [m/s], which an airspeed schedule and the propulsion generator use: with a schedule
+        and none known yet, no parameter test; the commanded roll and pitch [rad], which the
+        tracking generators take). None off the grid, for the first sample when a generator
+        needs the sample before, and for a sample with a non-finite value a generator takes
+        (skipped: the RLS keeps its parameters, and the next sample has no sample before)."""
+        regression = self.feed.step(time_s, state, controls, airspeed_mps, setpoint_rad)
+        if regression is None:
             return None
         airspeed_offset_mps = self.airspeed_offset_mps(airspeed_mps)
-        settled = time_s - self.started_s >= self.calibration.settle_s
-        regression = regressions(state, controls, previous)
+        settled = time_s - self.feed.started_s >= self.calibration.settle_s
         residual, statistic, deviation, theta = [], [], [], {}
-        for name in CHANNELS:
+        for name, channel in self.calibration.channels.items():
             step = self.rls[name].update(*regression[name])
-            channel = self.calibration.channels[name]
             g = self.glrt[name].update(step.prediction_error)
             residual.append(step.prediction_error)
             statistic.append(g if g is not None and settled else math.nan)
@@ -186,15 +220,14 @@ class SelfTuningDetector:
         return 0.0 if reference is None else filtered - reference
 
 
-
 def run_detector(calibration: Calibration, flight: Sequence[np.ndarray],
                  false_alarm_probability: float) -> list[DetectorSample]:
     """The detector over one flight (DetectorFlight, or (times, states, controls) without
     airspeed) from its calibration: every sample it makes."""
     detector = SelfTuningDetector(calibration, false_alarm_probability)
     samples = []
-    for time_s, state, control, airspeed_mps in zip(*detector_flight(flight), strict=True):
-        sample = detector.update(time_s, state, control, airspeed_mps)
-        if sample is not None:
-            samples.append(sample)
+    for sample in flight_samples(flight):
+        result = detector.update(*sample)
+        if result is not None:
+            samples.append(result)
     return samples

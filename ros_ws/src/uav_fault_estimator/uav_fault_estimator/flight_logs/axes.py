@@ -29,6 +29,11 @@ def body_rates_frd(rates_radps: np.ndarray, axes: str) -> np.ndarray:
     return rates_radps @ _BODY_SWAP if checked_axes(axes) == "FLU" else rates_radps
 
 
+def world_vectors_ned(vectors: np.ndarray, axes: str) -> np.ndarray:
+    """Vectors (n, 3) in the log's world frame (ENU for FLU logs, NED for FRD) -> NED."""
+    return vectors @ _WORLD_SWAP if checked_axes(axes) == "FLU" else vectors
+
+
 def euler_from_quaternions(quaternions_wxyz: np.ndarray, axes: str) -> np.ndarray:
     """Attitude quaternions (n, 4), scalar first, rotating the log's body axes into its world
     frame -> roll, pitch, yaw (n, 3) [rad] of FRD from NED (yaw in (-pi, pi]). Rows that are

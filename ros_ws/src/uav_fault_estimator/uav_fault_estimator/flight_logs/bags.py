@@ -28,6 +28,7 @@ from uav_fault_estimator.flight_logs.topics import (
     message_times_s,
     padded_rows,
     register_mavros_types,
+    sought_topics,
 )
 from uav_fault_estimator.recording.project_bag import project_typestore
 
@@ -42,32 +43,36 @@ def read_bag(path: Path, topics: Mapping[str, str] | None = None,
     """The flight in a ROS 1 bag file or a ROS 2 bag folder. topics: topic name -> meaning
     (topics.MEANINGS; default topics.DEFAULT_TOPICS); a topic missing from the bag gives no
     stream. axes ("FRD" or "FLU") overrides each message type's own convention. ValueError
-    (one line naming the bag) when it cannot be read or a topic has another type."""
+    (one line naming the bag) when it cannot be read; a topic of another type is not read
+    (a warning)."""
     path = Path(path)
     topics = checked_topics(topics)
     merged = LogStreams()
+    start_ns = 0
     try:
         with AnyReader([path], default_typestore=register_mavros_types(
                 project_typestore())) as reader:
-            wanted = [c for c in reader.connections if c.topic in topics]
-            for connection in wanted:
-                meaning = MEANINGS[topics[connection.topic]]
-                if connection.msgtype != meaning.message_type:
-                    raise ValueError(f"topic {connection.topic} is {connection.msgtype}, "
-                                     f"expected {meaning.message_type}")
+            wanted = [c for c in reader.connections if c.topic in topics
+                      and c.msgtype == MEANINGS[topics[c.topic]].message_type]
+            notes = [f"topic {c.topic} is {c.msgtype}, not "
+                     f"{MEANINGS[topics[c.topic]].message_type}: not read"
+                     for c in reader.connections if c.topic in topics and c not in wanted]
             for topic in sorted({c.topic for c in wanted}):
                 meaning = MEANINGS[topics[topic]]
                 times_s, fields = _topic_fields(
                     reader, [c for c in wanted if c.topic == topic], meaning)
                 merged.add(topic, meaning, meaning.streams(times_s, fields,
                                                            axes or meaning.axes))
+            start_ns = reader.start_time
     except (*_UNREADABLE, ValueError) as error:
         reason = " ".join(str(error).split()) or type(error).__name__
         raise ValueError(f"{path}: not a readable ROS bag ({reason})") from None
     return FlightLog(name=path.stem if path.suffix == ".bag" else path.name,
                      source=str(path), format="ros1_bag" if path.suffix == ".bag"
                      else "ros2_bag", streams=merged.streams,
-                     airspeed_source=merged.airspeed_source)
+                     airspeed_source=merged.airspeed_source,
+                     warnings=tuple(f"log {path}: {note}" for note in notes + merged.notes),
+                     start_stamp_s=start_ns * 1e-9, sought=sought_topics(topics))
 
 
 def _topic_fields(reader: AnyReader, connections: list,

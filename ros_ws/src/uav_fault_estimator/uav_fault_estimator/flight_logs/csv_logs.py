@@ -1,7 +1,8 @@
 """Per-topic CSV files exported from bags, one folder a flight, as flight logs.
 
 The layouts bag exporters write: one file a topic, named after it (/mavros/imu/data:
-mavros-imu-data.csv, _mavros_imu_data.csv or mavros_imu_data.csv), a header row of the
+mavros-imu-data.csv, _mavros_imu_data.csv or mavros_imu_data.csv), or after the folder and
+the topic (ALFA's processed flights: FOLDER-mavros-imu-data.csv), a header row of the
 log time and the message's fields by dotted path with a prefix `field.` (rostopic echo -p,
 "%time,field.header.stamp,...") or `.` ("time,.header.stamp.secs,.header.stamp.nsecs,...").
 Stamps are one column in nanoseconds (`header.stamp`) or two (`header.stamp.secs`/`nsecs`,
@@ -9,7 +10,8 @@ ROS 1; `header.stamp.sec`/`nanosec`, ROS 2); the log time `time` is in nanosecon
 written as an integer above 1e12 (rostopic), in seconds otherwise. Arrays are one column an
 element (`channels0`, `channels_0` or `channels[0]`) or one column of a bracketed list
 ("[1500, 1500]" or "(1500, 1500)"). The topics and their meaning are topics.py's, shared
-with the bags; times are in seconds from the earliest log time of the files read.
+with the bags; times are in seconds from the earliest log time of the files read, which
+the log records (FlightLog.start_stamp_s).
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from uav_fault_estimator.flight_logs.topics import (
     checked_topics,
     message_times_s,
     padded_rows,
+    sought_topics,
 )
 
 NANOSECONDS_ABOVE = 1e12  # a log time written as an integer above this is in nanoseconds
@@ -52,6 +55,19 @@ def topic_file_key(name: str) -> str:
     return re.sub(r"[/\-_]+", "_", name).strip("_")
 
 
+def topic_file_name(topic: str) -> str:
+    """The file a topic is looked for in, as the line naming a missing stream spells it."""
+    return f"[FOLDER-]{topic.strip('/').replace('/', '-')}.csv"
+
+
+def csv_files(folder: Path) -> dict[str, Path]:
+    """The folder's CSV files by topic_file_key of their stems, a leading folder name and
+    dash dropped (ALFA's FOLDER-mavros-imu-data.csv)."""
+    prefix = f"{folder.name}-"
+    return {topic_file_key(path.stem.removeprefix(prefix)): path
+            for path in sorted(folder.glob("*.csv"))}
+
+
 def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
                     axes: str | None = None) -> FlightLog:
     """The flight in a folder of per-topic CSV files. topics: topic name -> meaning
@@ -60,7 +76,7 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
     naming the file) when a file lacks a field its topic needs or a value is not a number."""
     folder = Path(folder)
     topics = checked_topics(topics)
-    files = {topic_file_key(path.stem): path for path in sorted(folder.glob("*.csv"))}
+    files = csv_files(folder)
     tables = {topic: _table(files[topic_file_key(topic)], MEANINGS[topics[topic]])
               for topic in topics if topic_file_key(topic) in files}
     if not files:
@@ -85,7 +101,10 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
             reason = error.args[0] if error.args else type(error).__name__
             raise ValueError(f"{path}: {reason}") from None
     return FlightLog(name=folder.name, source=str(folder), format="csv",
-                     streams=merged.streams, airspeed_source=merged.airspeed_source)
+                     streams=merged.streams, airspeed_source=merged.airspeed_source,
+                     warnings=tuple(f"log {folder}: {note}" for note in merged.notes),
+                     start_stamp_s=start_ns * 1e-9,
+                     sought=sought_topics(topics, topic_file_name))
 
 
 def _named(path: Path, read: Callable[[dict[str, list[str]]], np.ndarray],

@@ -9,7 +9,7 @@ from pathlib import Path
 from uav_fault_estimator.flight_logs.axes import checked_axes
 from uav_fault_estimator.flight_logs.bags import read_bag
 from uav_fault_estimator.flight_logs.csv_logs import read_csv_folder
-from uav_fault_estimator.flight_logs.streams import FlightLog
+from uav_fault_estimator.flight_logs.streams import FlightLog, without_dead_airspeed
 from uav_fault_estimator.flight_logs.ulog import read_ulog
 
 # What read_log takes, in words, for the lines that refuse anything else.
@@ -34,17 +34,18 @@ def read_log(path: Path, axes: str | None = None) -> FlightLog:
     """The flight in a log: a PX4 ULog (.ulg), a ROS 1 bag (.bag), a ROS 2 bag (a folder with
     metadata.yaml) or a folder of per-topic CSV files, with the default topics of each.
     axes ("FRD" or "FLU") overrides the format's own convention, for logs whose convention
-    differs. ValueError (one line naming the path) for anything else."""
+    differs. An airspeed that is 0 throughout is none (streams.without_dead_airspeed).
+    ValueError (one line naming the path) for anything else."""
     path = Path(path)
     if axes is not None:
         checked_axes(axes)
     kind = log_format(path)
     if kind == "ulog":
-        return read_ulog(path, axes or "FRD")
+        return without_dead_airspeed(read_ulog(path, axes or "FRD"))
     if kind in ("ros1_bag", "ros2_bag"):
-        return read_bag(path, axes=axes)
+        return without_dead_airspeed(read_bag(path, axes=axes))
     if kind == "csv":
-        return read_csv_folder(path, axes=axes)
+        return without_dead_airspeed(read_csv_folder(path, axes=axes))
     raise ValueError(f"{path}: not a flight log (expected {LOG_KINDS})"
                      if path.exists() else f"{path}: no such file or folder")
 

@@ -46,8 +46,12 @@ from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
     BODY_RATES,
+    GROUND_VELOCITY,
     OUTPUTS,
+    PITCH_SETPOINT,
+    ROLL_SETPOINT,
     SURFACES,
+    WIND,
     FlightLog,
     TimedSeries,
 )
@@ -142,21 +146,28 @@ def slow_stream_warning(name: str, series: TimedSeries, period_s: float) -> str 
 
 @dataclass(frozen=True)
 class DetectorInputs:
-    """A log on the detector's grid: times_s (K,) [s], state (K, 14) and controls (K, 7) in
-    uav_common.channels order (NaN where the log has no such channel, before or after a stream,
-    in its gaps), airspeed_mps (K,) (NaN likewise), and one line per thing to know
-    (slow streams, absent streams, mixed outputs the log contradicts)."""
+    """A log on the detector's grid: times_s (K,) [s from the log's start], state (K, 14)
+    and controls (K, 7) in uav_common.channels order (NaN where the log has no such channel,
+    before or after a stream, in its gaps), airspeed_mps (K,) (NaN likewise; ground speed
+    minus the wind where the log has those and no airspeed), one line per thing to know
+    (slow streams, absent streams, mixed outputs the log contradicts, an estimated
+    airspeed), start_stamp_s the log's start in its own clock [s] (FlightLog.start_stamp_s)
+    and attitude_setpoint_rad (K, 2) the autopilot's commanded roll and pitch [rad] (NaN
+    where the log has none)."""
 
     times_s: np.ndarray
     state: np.ndarray
     controls: np.ndarray
     airspeed_mps: np.ndarray
     warnings: tuple[str, ...]
+    start_stamp_s: float = 0.0
+    attitude_setpoint_rad: np.ndarray | None = None
 
     @property
     def flight(self) -> DetectorFlight:
         """What self_tuning.run_detector and calibrate take."""
-        return DetectorFlight(self.times_s, self.state, self.controls, self.airspeed_mps)
+        return DetectorFlight(self.times_s, self.state, self.controls, self.airspeed_mps,
+                              self.attitude_setpoint_rad)
 
 
 def _surfaces(log: FlightLog, airframe: Airframe | None) -> tuple[str, TimedSeries]:
@@ -185,7 +196,7 @@ def detector_samples(log: FlightLog, airframe: Airframe | None,
     (the module's docstring). airframe maps the log's OUTPUTS (None for a log with SURFACES).
     ValueError (one line) without body rates or surfaces, or when they do not overlap."""
     if BODY_RATES not in log.streams:
-        raise ValueError(f"log {log.source}: no body rates, which the detector needs")
+        raise ValueError(log.missing(BODY_RATES, "the detector needs"))
     rates = log.streams[BODY_RATES]
     surfaces_name, surfaces = _surfaces(log, airframe)
     times_s = np.zeros(0)
@@ -203,18 +214,40 @@ def detector_samples(log: FlightLog, airframe: Airframe | None,
     if ATTITUDE in log.streams:
         attitude = log.streams[ATTITUDE]
         _fill(state, STATE_CHANNELS, attitude.columns, resample(attitude, times_s, ANGULAR))
+    if GROUND_VELOCITY in log.streams:
+        velocity = log.streams[GROUND_VELOCITY]
+        _fill(state, STATE_CHANNELS, velocity.columns, resample(velocity, times_s, LINEAR))
+    setpoints = np.column_stack([
+        resample(log.streams[name], times_s, ANGULAR)[:, 0] if name in log.streams
+        else np.full(times_s.size, np.nan) for name in (ROLL_SETPOINT, PITCH_SETPOINT)])
+    warnings = _warnings(log, airframe, surfaces_name, surfaces, period_s)
     if AIRSPEED in log.streams:
         airspeed_mps = resample(log.streams[AIRSPEED], times_s, LINEAR)[:, 0]
-    return DetectorInputs(times_s, state, controls, airspeed_mps,
-                          tuple(_warnings(log, airframe, surfaces_name, surfaces, period_s)))
+    elif GROUND_VELOCITY in log.streams and WIND in log.streams:
+        airspeed_mps = _air_relative_speed_mps(state, resample(log.streams[WIND], times_s,
+                                                               LINEAR))
+        warnings.append(f"log {log.source}: airspeed taken as the ground velocity less the "
+                        "autopilot's wind estimate (horizontal)")
+    return DetectorInputs(times_s, state, controls, airspeed_mps, tuple(warnings),
+                          log.start_stamp_s, setpoints)
+
+
+def _air_relative_speed_mps(state: np.ndarray, wind_mps: np.ndarray) -> np.ndarray:
+    """|v_ground - v_wind| horizontally [m/s] (K,): an airspeed proxy, from the state's
+    ground velocity and the wind (K, 2) north and east."""
+    ground = state[:, [STATE_CHANNELS.index("velocity_north"),
+                       STATE_CHANNELS.index("velocity_east")]]
+    return np.linalg.norm(ground - wind_mps, axis=1)
 
 
 def _warnings(log: FlightLog, airframe: Airframe | None, surfaces_name: str,
               surfaces: TimedSeries, period_s: float) -> list[str]:
     """detector_samples' lines: the reader's own, streams absent or slower than the grid, an
     airspeed other than the airframe names, mixed outputs the log contradicts."""
+    proxy = GROUND_VELOCITY in log.streams and WIND in log.streams
     lines = [*log.warnings, *(f"log {log.source}: no {name} stream (NaN on the grid)"
-                              for name in (ATTITUDE, AIRSPEED) if name not in log.streams)]
+                              for name in (ATTITUDE, AIRSPEED) if name not in log.streams
+                              and not (name == AIRSPEED and proxy))]
     streams = {name: log.streams[name] for name in (BODY_RATES, ATTITUDE, AIRSPEED)
                if name in log.streams}
     for name, series in {**streams, surfaces_name: surfaces}.items():

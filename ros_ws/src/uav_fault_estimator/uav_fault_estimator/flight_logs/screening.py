@@ -2,7 +2,7 @@
 log's detector samples as alarm intervals, counts and a summary, its table and its figure.
 No ROS here.
 
-Three tests, each per channel (roll, pitch, yaw: self_tuning.CHANNELS): "glrt" the channel's
+Three tests, each per channel (the calibration's generators, in its order): "glrt" the channel's
 GLRT statistic over its threshold, "parameter" the channel's largest normalised parameter
 deviation over the parameter threshold, "combined" both on the same channel (the detector's
 combined alarm is raised when some channel's is). An interval is a run of consecutive
@@ -27,7 +27,6 @@ import numpy as np
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_common.sample_grid import GRID_TOLERANCE_S
 
-from uav_fault_estimator.detection.calibration import CHANNELS
 from uav_fault_estimator.detection.detector import DetectorSample
 from uav_fault_estimator.flight_logs.resample import DetectorInputs
 from uav_fault_estimator.reporting.figures import save_figure, shade_alarms
@@ -50,12 +49,13 @@ class AlarmInterval:
     samples: int
 
 
-def channel_alarms(samples: Sequence[DetectorSample]) -> dict[str, np.ndarray]:
-    """Per test (TESTS), which samples alarmed on which channel: (K, 3) bool in CHANNELS
-    order (a NaN statistic or deviation, before the detector settles, never alarms)."""
-    glrt = np.array([sample.alarm for sample in samples], dtype=bool).reshape(-1, len(CHANNELS))
+def channel_alarms(samples: Sequence[DetectorSample], channels: int) -> dict[str, np.ndarray]:
+    """Per test (TESTS), which samples alarmed on which of the channels: (K, channels) bool
+    in the calibration's order (a NaN statistic or deviation, before the detector settles,
+    never alarms)."""
+    glrt = np.array([sample.alarm for sample in samples], dtype=bool).reshape(-1, channels)
     parameter = np.array([sample.parameter_deviation > sample.parameter_threshold
-                          for sample in samples], dtype=bool).reshape(-1, len(CHANNELS))
+                          for sample in samples], dtype=bool).reshape(-1, channels)
     return {"glrt": glrt, "parameter": parameter, COMBINED: glrt & parameter}
 
 
@@ -73,18 +73,19 @@ def raised_runs(times_s: np.ndarray, raised: np.ndarray,
     return runs
 
 
-def alarm_intervals(samples: Sequence[DetectorSample], period_s: float) -> list[AlarmInterval]:
-    """Every test's alarm intervals on every channel, by start time (then CHANNELS, TESTS
-    order); period_s the detector's sample period [s]."""
+def alarm_intervals(samples: Sequence[DetectorSample], channels: Sequence[str],
+                    period_s: float) -> list[AlarmInterval]:
+    """Every test's alarm intervals on every one of the channels (the calibration's), by
+    start time (then channels, TESTS order); period_s the detector's sample period [s]."""
     times_s = np.array([sample.time_s for sample in samples])
     intervals = []
-    for test, raised in channel_alarms(samples).items():
-        for c, channel in enumerate(CHANNELS):
+    for test, raised in channel_alarms(samples, len(channels)).items():
+        for c, channel in enumerate(channels):
             intervals += [AlarmInterval(round(float(times_s[first]), TIME_DECIMALS),
                                         round(float(times_s[last]), TIME_DECIMALS),
                                         channel, test, last - first + 1)
                           for first, last in raised_runs(times_s, raised[:, c], period_s)]
-    return sorted(intervals, key=lambda i: (i.start_s, CHANNELS.index(i.channel),
+    return sorted(intervals, key=lambda i: (i.start_s, list(channels).index(i.channel),
                                             TESTS.index(i.test)))
 
 
@@ -94,27 +95,32 @@ def first_combined_alarm_s(samples: Sequence[DetectorSample]) -> float | None:
                  if sample.combined_alarm), None)
 
 
-def log_summary(name: str, source: str, samples: Sequence[DetectorSample], period_s: float,
-                warnings: Sequence[str]) -> dict[str, Any]:
+def log_summary(name: str, source: str, samples: Sequence[DetectorSample],
+                channels: Sequence[str], period_s: float, warnings: Sequence[str],
+                start_stamp_s: float) -> dict[str, Any]:
     """A log's screening as JSON-ready data: its name and source (path), samples (the
     detector's), tested_samples (those with every GLRT statistic: after the settling and
     the window), alarm_samples per test (per channel and "any"), the any-channel alarm rate
-    per tested sample, the first combined alarm [s], the intervals and the log's warnings."""
-    alarms = channel_alarms(samples)
+    per tested sample, the first combined alarm [s], the intervals, the log's warnings and
+    start_stamp_s, the instant its times count from in its own clock [s]."""
+    alarms = channel_alarms(samples, len(channels))
     tested = int(sum(np.isfinite(sample.statistic).all() for sample in samples))
     counts = {test: {"any": int(raised.any(axis=1).sum()),
-                     **{channel: int(raised[:, c].sum()) for c, channel in enumerate(CHANNELS)}}
+                     **{channel: int(raised[:, c].sum()) for c, channel in enumerate(channels)}}
               for test, raised in alarms.items()}
     return {
         "log": name,
         "source": source,
+        "start_stamp_s": start_stamp_s,
+        "channels": list(channels),
         "samples": len(samples),
         "tested_samples": tested,
         "alarm_samples": counts,
         "alarm_rate": {test: (count["any"] / tested if tested else None)
                        for test, count in counts.items()},
         "first_combined_alarm_s": first_combined_alarm_s(samples),
-        "intervals": [asdict(interval) for interval in alarm_intervals(samples, period_s)],
+        "intervals": [asdict(interval)
+                      for interval in alarm_intervals(samples, channels, period_s)],
         "warnings": list(warnings),
     }
 
@@ -143,15 +149,18 @@ def write_alarm_csv(path: Path, intervals: Sequence[AlarmInterval]) -> None:
 
 
 def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[DetectorSample],
-                   intervals: Sequence[AlarmInterval], period_s: float, path: Path) -> Path:
+                   channels: Sequence[str], intervals: Sequence[AlarmInterval],
+                   period_s: float, path: Path, onset_s: float | None = None) -> Path:
     """One log's figure: body rates and surfaces [deg], airspeed (the log's and the filtered
-    one the schedule used) [m/s], each GLRT statistic over its threshold and the parameter
-    deviations over theirs (log scale), the combined alarm intervals shaded on every panel
-    (each sample widened by half a period_s [s] either side)."""
+    one the schedule used) [m/s], each channel's GLRT statistic over its threshold and the
+    parameter deviations over theirs (log scale), the combined alarm intervals shaded on
+    every panel (each sample widened by half a period_s [s] either side), and a failure's
+    onset_s [s from the log's start] as a line on every panel."""
     times_s = np.array([sample.time_s for sample in samples])
     combined = [(i.start_s - period_s / 2, i.end_s + period_s / 2)
                 for i in intervals if i.test == COMBINED]
-    figure, axes = plt.subplots(7, 1, figsize=(10, 15), sharex=True)
+    figure, axes = plt.subplots(4 + len(channels), 1, figsize=(10, 6 + 2 * len(channels)),
+                                sharex=True)
     for name in ("roll_rate", "pitch_rate", "yaw_rate"):
         axes[0].plot(inputs.times_s, np.degrees(inputs.state[:, STATE_CHANNELS.index(name)]),
                      label=name, linewidth=0.8)
@@ -164,7 +173,7 @@ def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[Detecto
     axes[2].plot(inputs.times_s, inputs.airspeed_mps, label="log", linewidth=0.8)
     axes[2].plot(times_s, [sample.airspeed_mps for sample in samples], label="filtered")
     axes[2].set_ylabel("airspeed [m/s]")
-    for c, channel in enumerate(CHANNELS):
+    for c, channel in enumerate(channels):
         statistic = np.array([sample.statistic[c] for sample in samples])
         axes[3 + c].semilogy(times_s, np.where(statistic > 0, statistic, math.nan),
                              label="statistic")
@@ -172,13 +181,15 @@ def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[Detecto
                              label="threshold")
         axes[3 + c].set_ylabel(f"GLRT {channel}")
     deviation = np.array([sample.parameter_deviation for sample in samples])
-    for c, channel in enumerate(CHANNELS):
-        axes[6].semilogy(times_s, deviation[:, c], label=channel, linewidth=0.8)
-    axes[6].semilogy(times_s, [sample.parameter_threshold for sample in samples], "k:",
-                     label="threshold")
-    axes[6].set_ylabel("parameter deviation")
+    for c, channel in enumerate(channels):
+        axes[-1].semilogy(times_s, deviation[:, c], label=channel, linewidth=0.8)
+    axes[-1].semilogy(times_s, [sample.parameter_threshold for sample in samples], "k:",
+                      label="threshold")
+    axes[-1].set_ylabel("parameter deviation")
     for axis in axes:
         shade_alarms(axis, combined)
+        if onset_s is not None:
+            axis.axvline(onset_s, color="r", linestyle="--", linewidth=1.0, label="onset")
         axis.legend(fontsize=7, loc="upper left")
     axes[0].set_title(title)
     axes[-1].set_xlabel("time from the log's start [s]")

@@ -5,7 +5,7 @@ columns, shared by the readers, the airframe mapping and the resampling."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -20,11 +20,19 @@ OUTPUTS = "outputs"  # output_1 ... output_n, raw
 # The surfaces already as deflections (the project's own recordings, /controls): aileron,
 # elevator, rudder [rad, ControlInputs.msg's signs], throttle [0, 1]; no airframe file needed.
 SURFACES = "surfaces"
+GROUND_VELOCITY = "ground_velocity"  # velocity_north, velocity_east, velocity_down [m/s]
+WIND = "wind"  # wind_north, wind_east [m/s]: the autopilot's estimate, towards which it blows
+# The autopilot's commanded attitude (its attitude controller's setpoints) [rad], NED
+ROLL_SETPOINT, PITCH_SETPOINT = "roll_setpoint", "pitch_setpoint"
 STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
     BODY_RATES: ("roll_rate", "pitch_rate", "yaw_rate"),
     ATTITUDE: ("roll", "pitch", "yaw"),
     AIRSPEED: ("airspeed",),
     SURFACES: ("aileron", "elevator", "rudder", "throttle"),
+    GROUND_VELOCITY: ("velocity_north", "velocity_east", "velocity_down"),
+    WIND: ("wind_north", "wind_east"),
+    ROLL_SETPOINT: ("roll_setpoint",),
+    PITCH_SETPOINT: ("pitch_setpoint",),
 }
 OUTPUT_UNITS = ("pwm_us", "normalised")
 # What a log's airspeed is: true (TAS), calibrated (CAS) or indicated (IAS); the readers say
@@ -62,7 +70,10 @@ class FlightLog:
     the log has), output_unit (OUTPUT_UNITS) of the OUTPUTS stream, airspeed_source
     (AIRSPEED_SOURCES: which airspeed the AIRSPEED stream holds, "" when the log has none),
     warnings: what the reader noticed and the user should know (each line names the log;
-    a damaged ULog read up to its damage)."""
+    a damaged ULog read up to its damage), start_stamp_s: the instant its times count from,
+    in the log's own clock [s] (UNIX time for ROS logs, time since boot for ULogs), sought:
+    per stream name, what the reader looked for to find it (files, topics), for the line
+    that says a needed stream is missing."""
 
     name: str
     source: str
@@ -71,6 +82,14 @@ class FlightLog:
     output_unit: str = "pwm_us"
     airspeed_source: str = ""
     warnings: tuple[str, ...] = ()
+    start_stamp_s: float = 0.0
+    sought: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def missing(self, stream: str, needed_for: str) -> str:
+        """The line for a stream this log lacks and needed_for needs."""
+        looked = self.sought.get(stream, ())
+        return (f"log {self.source}: no {stream.replace('_', ' ')}, which {needed_for}"
+                + (f" (looked for {', '.join(looked)})" if looked else ""))
 
 
 def ordered_series(times_s: np.ndarray, values: np.ndarray,
@@ -89,3 +108,15 @@ def ordered_series(times_s: np.ndarray, values: np.ndarray,
     times_s, values = times_s[order], values[order]
     first = np.concatenate(([True], np.diff(times_s) > 0))
     return TimedSeries(times_s[first], values[first], tuple(columns))
+
+
+def without_dead_airspeed(log: FlightLog) -> FlightLog:
+    """The log without its airspeed stream when that is 0 in every sample (a sensor not
+    fitted or not read: ALFA's flights from 2018-09-11 on), said in its warnings; else the
+    log itself."""
+    series = log.streams.get(AIRSPEED)
+    if series is None or np.any(series.values != 0.0):
+        return log
+    streams = {name: s for name, s in log.streams.items() if name != AIRSPEED}
+    return replace(log, streams=streams, airspeed_source="", warnings=(
+        *log.warnings, f"log {log.source}: its airspeed is 0 throughout: read as no airspeed"))

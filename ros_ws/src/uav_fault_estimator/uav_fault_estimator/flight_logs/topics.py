@@ -22,14 +22,23 @@ from uav_common.channels import (
     field_name,
 )
 
-from uav_fault_estimator.flight_logs.axes import body_rates_frd, euler_frd, euler_from_quaternions
+from uav_fault_estimator.flight_logs.axes import (
+    body_rates_frd,
+    euler_frd,
+    euler_from_quaternions,
+    world_vectors_ned,
+)
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
     BODY_RATES,
+    GROUND_VELOCITY,
     OUTPUTS,
+    PITCH_SETPOINT,
+    ROLL_SETPOINT,
     STREAM_COLUMNS,
     SURFACES,
+    WIND,
     TimedSeries,
     ordered_series,
 )
@@ -58,8 +67,9 @@ Streams = dict[str, TimedSeries]
 class TopicMeaning:
     """How one message type becomes streams: its type, the fields it reads (dotted paths;
     arrays named bare), which of them are arrays, the axes of its rates and attitude
-    ("FRD" or "FLU", axes.py), the airspeed it holds (streams.AIRSPEED_SOURCES, "" none) and
-    streams(times_s, fields, axes) -> the streams by name."""
+    ("FRD" or "FLU", axes.py), the airspeed it holds (streams.AIRSPEED_SOURCES, "" none),
+    streams(times_s, fields, axes) -> the streams by name, and the names of the streams it
+    can give."""
 
     message_type: str
     fields: tuple[str, ...]
@@ -67,6 +77,7 @@ class TopicMeaning:
     axes: str
     airspeed_source: str
     streams: Callable[[np.ndarray, Fields, str], Streams]
+    gives: tuple[str, ...]
 
 
 def _columns(fields: Fields, names: tuple[str, ...]) -> np.ndarray:
@@ -106,6 +117,38 @@ def _vfr_hud(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
     return _streams(times_s, **{AIRSPEED: _columns(fields, ("airspeed",))})
 
 
+_LINEAR = tuple(f"twist.linear.{axis}" for axis in "xyz")
+
+
+def _ground_velocity(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """geometry_msgs/TwistStamped of MAVROS's local_position/velocity: the ground velocity
+    [m/s] in the log's world frame."""
+    return _streams(times_s, **{GROUND_VELOCITY: world_vectors_ned(_columns(fields, _LINEAR),
+                                                                   axes)})
+
+
+def _wind(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """geometry_msgs/TwistStamped of MAVROS's wind_estimation: the wind [m/s] (the velocity
+    of the air over the ground) in the log's world frame; its horizontal part."""
+    return _streams(times_s, **{WIND: world_vectors_ned(_columns(fields, _LINEAR),
+                                                        axes)[:, :2]})
+
+
+def _euler(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """geometry_msgs/Vector3 of roll, pitch, yaw [rad] (x, y, z) of the log's body axes from
+    its world frame (ALFA's /mavctrl/rpy, FLU from ENU)."""
+    euler = _columns(fields, ("x", "y", "z"))
+    return _streams(times_s, **{ATTITUDE: euler_frd(euler, axes)})
+
+
+def _setpoint(stream: str) -> Callable[[np.ndarray, Fields, str], Streams]:
+    """The streams of a commanded/measured pair in degrees (ALFA's /mavros/nav_info/roll and
+    /pitch: PX4's own NED angles, whatever the log's axes): the commanded angle [rad]."""
+    def streams(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+        return _streams(times_s, **{stream: np.radians(_columns(fields, ("commanded",)))})
+    return streams
+
+
 STATE_FIELDS = dict(zip(STATE_CHANNELS, map(field_name, STATE_CHANNELS, STATE_UNITS),
                         strict=True))
 CONTROL_FIELDS = dict(zip(CONTROL_CHANNELS, map(field_name, CONTROL_CHANNELS, CONTROL_UNITS),
@@ -134,28 +177,47 @@ def _air_data(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
 
 
 IMU, RC_OUT, VFR_HUD = "imu", "rc_out", "vfr_hud"
+VELOCITY, WIND_ESTIMATE, EULER = "velocity", "wind_estimate", "euler"
+ROLL_COMMAND, PITCH_COMMAND = "roll_command", "pitch_command"
 STATE, CONTROLS, AIR_DATA = "state", "controls", "air_data"
+_COMMAND_FIELDS = ("commanded", "measured")
 MEANINGS: Mapping[str, TopicMeaning] = {
     IMU: TopicMeaning("sensor_msgs/msg/Imu",
                       tuple(f"{vector}.{axis}" for vector in ("angular_velocity", "orientation")
                             for axis in ("xyz" if vector == "angular_velocity" else "wxyz")),
-                      (), "FLU", "", _imu),
+                      (), "FLU", "", _imu, (BODY_RATES, ATTITUDE)),
     RC_OUT: TopicMeaning("mavros_msgs/msg/RCOut", ("channels",), ("channels",), "FLU", "",
-                         _rc_out),
+                         _rc_out, (OUTPUTS,)),
     VFR_HUD: TopicMeaning("mavros_msgs/msg/VFR_HUD", ("airspeed",), (), "FLU", "indicated",
-                          _vfr_hud),
+                          _vfr_hud, (AIRSPEED,)),
+    VELOCITY: TopicMeaning("geometry_msgs/msg/TwistStamped", _LINEAR, (), "FLU", "",
+                           _ground_velocity, (GROUND_VELOCITY,)),
+    WIND_ESTIMATE: TopicMeaning("geometry_msgs/msg/TwistStamped", _LINEAR, (), "FLU", "",
+                                _wind, (WIND,)),
+    EULER: TopicMeaning("geometry_msgs/msg/Vector3", ("x", "y", "z"), (), "FLU", "", _euler,
+                        (ATTITUDE,)),
+    # ALFA's nav_info messages (header, commanded, measured; not a MAVROS type)
+    ROLL_COMMAND: TopicMeaning("mavros_msgs/msg/NavInfo", _COMMAND_FIELDS, (), "FRD", "",
+                               _setpoint(ROLL_SETPOINT), (ROLL_SETPOINT,)),
+    PITCH_COMMAND: TopicMeaning("mavros_msgs/msg/NavInfo", _COMMAND_FIELDS, (), "FRD", "",
+                                _setpoint(PITCH_SETPOINT), (PITCH_SETPOINT,)),
     STATE: TopicMeaning("uav_fault_msgs/msg/AircraftState",
                         tuple(STATE_FIELDS[name] for name in _RATES + _EULER), (), "FRD", "",
-                        _state),
+                        _state, (BODY_RATES, ATTITUDE)),
     CONTROLS: TopicMeaning("uav_fault_msgs/msg/ControlInputs",
                            tuple(CONTROL_FIELDS[name] for name in STREAM_COLUMNS[SURFACES]),
-                           (), "FRD", "", _controls),
+                           (), "FRD", "", _controls, (SURFACES,)),
     AIR_DATA: TopicMeaning("uav_fault_msgs/msg/AirData", AIR_DATA_FIELDS[:1], (), "FRD", "true",
-                           _air_data),
+                           _air_data, (AIRSPEED,)),
 }
-# Topic name -> meaning, by default: MAVROS's and the project's own recordings' (sim_node's).
+# Topic name -> meaning, by default: MAVROS's (with the topics ALFA's flights add) and the
+# project's own recordings' (sim_node's). Where two topics give one stream (imu/data and
+# imu/data_raw both give body rates), the faster is kept (LogStreams.add).
 MAVROS_TOPICS: Mapping[str, str] = {
-    "/mavros/imu/data": IMU, "/mavros/rc/out": RC_OUT, "/mavros/vfr_hud": VFR_HUD}
+    "/mavros/imu/data": IMU, "/mavros/imu/data_raw": IMU, "/mavros/rc/out": RC_OUT,
+    "/mavros/vfr_hud": VFR_HUD, "/mavros/local_position/velocity": VELOCITY,
+    "/mavros/wind_estimation": WIND_ESTIMATE, "/mavctrl/rpy": EULER,
+    "/mavros/nav_info/roll": ROLL_COMMAND, "/mavros/nav_info/pitch": PITCH_COMMAND}
 PROJECT_TOPICS: Mapping[str, str] = {"/state": STATE, "/controls": CONTROLS, "/air_data": AIR_DATA}
 DEFAULT_TOPICS: Mapping[str, str] = {**MAVROS_TOPICS, **PROJECT_TOPICS}
 
@@ -197,23 +259,43 @@ def message_times_s(stamps_ns: np.ndarray, log_times_ns: np.ndarray,
     return (times_ns - start_ns) * 1e-9
 
 
+def sought_topics(topics: Mapping[str, str],
+                  spelled: Callable[[str], str] = str) -> dict[str, tuple[str, ...]]:
+    """Per stream name, the topics (as spelled(topic): a file name, say) that could give it."""
+    sought: dict[str, tuple[str, ...]] = {}
+    for topic, meaning in topics.items():
+        for stream in MEANINGS[meaning].gives:
+            sought[stream] = (*sought.get(stream, ()), spelled(topic))
+    return sought
+
+
 @dataclass
 class LogStreams:
-    """The streams a log's topics gave, merged: by name, the topic each came from, and the
-    airspeed's source."""
+    """The streams a log's topics gave, merged: by name, the topic each came from, the
+    airspeed's source, and a line for each stream two topics gave."""
 
     streams: dict[str, TimedSeries] = field(default_factory=dict)
     origins: dict[str, str] = field(default_factory=dict)
     airspeed_source: str = ""
+    notes: list[str] = field(default_factory=list)
 
     def add(self, topic: str, meaning: TopicMeaning, streams: Streams) -> None:
-        """The streams of one topic of that meaning; ValueError when another topic gave one
-        of them already."""
+        """The streams of one topic of that meaning. A stream another topic gave already is
+        kept from the faster of the two (the shorter median period), and said in notes."""
         for name, series in streams.items():
             if name in self.streams:
-                raise ValueError(f"topics {self.origins[name]} and {topic} both give the "
-                                 f"{name} stream: read one of them (topics argument)")
+                kept, dropped = ((topic, series), (self.origins[name], self.streams[name]))
+                if series.median_period_s >= self.streams[name].median_period_s:
+                    kept, dropped = dropped, kept
+                self.notes.append(f"{name} from {kept[0]} ({_rate_hz(kept[1]):.1f} Hz), "
+                                  f"not {dropped[0]} ({_rate_hz(dropped[1]):.1f} Hz)")
+                if kept[0] != topic:
+                    continue
             self.streams[name] = series
             self.origins[name] = topic
             if name == AIRSPEED:
                 self.airspeed_source = meaning.airspeed_source
+
+
+def _rate_hz(series: TimedSeries) -> float:
+    return 1.0 / series.median_period_s

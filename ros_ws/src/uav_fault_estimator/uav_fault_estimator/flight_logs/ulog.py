@@ -84,7 +84,8 @@ def read_ulog(path: Path, axes: str = "FRD") -> FlightLog:
                "the damage and past what it could resynchronise on; samples may be missing",)
     return FlightLog(name=path.stem, source=str(path), format="ulog", streams=streams,
                      output_unit=output_unit, airspeed_source=airspeed_source,
-                     warnings=damaged if log.file_corruption or _cut_short(path) else ())
+                     warnings=damaged if log.file_corruption or _cut_short(path) else (),
+                     start_stamp_s=start_us / US_PER_S)
 
 
 def _cut_short(path: Path) -> bool:

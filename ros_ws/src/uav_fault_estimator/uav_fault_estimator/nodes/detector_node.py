@@ -29,7 +29,6 @@ from uav_common.ros.node_tools import (
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultAlarm
 from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, state_rate_gate
 
-from uav_fault_estimator.detection.calibration import CHANNELS
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import DetectorSample, SelfTuningDetector
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
@@ -93,7 +92,7 @@ class DetectorNode(Node):
     def message(self, sample: DetectorSample) -> FaultAlarm:
         return FaultAlarm(
             header=header(sample.time_s, BODY_FRAME),
-            channel_names=list(CHANNELS),
+            channel_names=list(self.detector.calibration.channel_names),
             statistic=sample.statistic.tolist(),
             threshold=sample.threshold.tolist(),
             alarm=sample.alarm.tolist(),
@@ -105,7 +104,8 @@ class DetectorNode(Node):
         )
 
     def report(self, sample: DetectorSample) -> None:
-        alarms = [name for name, on in zip(CHANNELS, sample.alarm, strict=True) if on]
+        alarms = [name for name, on in zip(self.detector.calibration.channel_names, sample.alarm,
+                                           strict=True) if on]
         if sample.combined_alarm:
             level, text = ERROR, "control-surface fault: GLRT and parameters agree"
         elif alarms or sample.parameter_alarm:

@@ -1,0 +1,142 @@
+"""The self-tuning residual generators (Blanke & Hansen, eq. 2-8, and the ones added here):
+each a model linear in its parameters, y[k] = phi[k]ᵀ theta, identified in flight by RLS
+(rls.py). A calibration names the generators it was made for; the detector runs those.
+
+    roll     p[k] = a_pa da[k] + b_pa                          (eq. 2)
+    pitch    q[k] = a_qe de[k] + b_qe                          (eq. 3)
+    yaw      r[k] = a_ra da[k] + b_ra r[k-1] + c_ra            (eq. 4)
+
+The paper's three read the surface commands: on a real aircraft whose failure shows in its
+outputs (a servo pinned by the failure), a generator fed that output sees an aircraft
+consistent with it. The closed-loop pair reads the autopilot's intent instead, its attitude
+setpoints, and the propulsion channel the along-track dynamics:
+
+    roll_tracking   p[k] = a (phi_c[k] - phi[k]) + b           the roll loop's response
+    pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b       the pitch loop's response
+    propulsion      (V[k] - V[k-1]) / T = a throttle[k] + b sin(theta[k]) + c V[k] + d
+
+p, q, r body rates [rad/s]; da aileron, de elevator [rad]; phi, theta roll and pitch and
+phi_c, theta_c their setpoints [rad]; V the speed through the air [m/s] (the airspeed, or
+the horizontal ground speed where none is known), T the sample period [s]; throttle 0..1.
+No ROS here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
+
+_P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
+_ROLL, _PITCH = STATE_CHANNELS.index("roll"), STATE_CHANNELS.index("pitch")
+_VN, _VE = STATE_CHANNELS.index("velocity_north"), STATE_CHANNELS.index("velocity_east")
+_AILERON, _ELEVATOR, _THROTTLE = (CONTROL_CHANNELS.index(name)
+                                  for name in ("aileron", "elevator", "throttle"))
+
+
+class GridSample(NamedTuple):
+    """One sample on the detector's grid: state (14,) and controls (7,) in uav_common.channels
+    order, airspeed_mps [m/s] (NaN unknown), setpoint_rad (2,) commanded roll and pitch
+    [rad] (NaN unknown), period_s the grid's period [s]."""
+
+    state: np.ndarray
+    controls: np.ndarray
+    airspeed_mps: float
+    setpoint_rad: np.ndarray
+    period_s: float
+
+    @property
+    def speed_mps(self) -> float:
+        """The speed through the air [m/s]: the airspeed, else the horizontal ground speed."""
+        if math.isfinite(self.airspeed_mps):
+            return self.airspeed_mps
+        return math.hypot(self.state[_VN], self.state[_VE])
+
+
+# (phi, y) of a generator from this sample and the one before (None: not known)
+Regression = tuple[np.ndarray, float]
+
+
+@dataclass(frozen=True)
+class Generator:
+    """A residual generator: its name (the detector's channel), its parameters' names, and
+    regression(now, before) -> (phi, y); before is None after a start or a gap, and a
+    generator that needs it (needs_previous) cannot run then."""
+
+    name: str
+    parameters: tuple[str, ...]
+    needs_previous: bool
+    regression: Callable[[GridSample, GridSample | None], Regression]
+
+
+def _roll(now: GridSample, before: GridSample | None) -> Regression:
+    return np.array([now.controls[_AILERON], 1.0]), now.state[_P]  # eq. 2, 5
+
+
+def _pitch(now: GridSample, before: GridSample | None) -> Regression:
+    return np.array([now.controls[_ELEVATOR], 1.0]), now.state[_Q]  # eq. 3, 6
+
+
+def _yaw(now: GridSample, before: GridSample) -> Regression:
+    return np.array([now.controls[_AILERON], before.state[_R], 1.0]), now.state[_R]  # eq. 4, 7
+
+
+def _roll_tracking(now: GridSample, before: GridSample | None) -> Regression:
+    return np.array([_angle_rad(now.setpoint_rad[0] - now.state[_ROLL]), 1.0]), now.state[_P]
+
+
+def _pitch_tracking(now: GridSample, before: GridSample | None) -> Regression:
+    return np.array([_angle_rad(now.setpoint_rad[1] - now.state[_PITCH]), 1.0]), now.state[_Q]
+
+
+def _propulsion(now: GridSample, before: GridSample) -> Regression:
+    speed_mps = now.speed_mps
+    acceleration_mps2 = (speed_mps - before.speed_mps) / now.period_s
+    return (np.array([now.controls[_THROTTLE], math.sin(now.state[_PITCH]), speed_mps, 1.0]),
+            acceleration_mps2)
+
+
+def _angle_rad(angle_rad: float) -> float:
+    """An angle difference [rad] into [-pi, pi)."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
+
+
+GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator in (
+    Generator("roll", ("a_pa", "b_pa"), False, _roll),
+    Generator("pitch", ("a_qe", "b_qe"), False, _pitch),
+    Generator("yaw", ("a_ra", "b_ra", "c_ra"), True, _yaw),
+    Generator("roll_tracking", ("a_rt", "b_rt"), False, _roll_tracking),
+    Generator("pitch_tracking", ("a_pt", "b_pt"), False, _pitch_tracking),
+    Generator("propulsion", ("a_vt", "b_vt", "c_vt", "d_vt"), True, _propulsion),
+)}
+# The paper's three: the simulated Aerosonde's shipped calibration.
+SURFACE_GENERATORS = ("roll", "pitch", "yaw")
+
+
+def checked_generators(names: tuple[str, ...]) -> tuple[str, ...]:
+    """names when each is a generator's and none repeats; ValueError otherwise."""
+    unknown = [name for name in names if name not in GENERATORS]
+    if unknown or len(set(names)) != len(names) or not names:
+        raise ValueError(f"generators {', '.join(names) or 'none'}: expected some of "
+                         f"{', '.join(GENERATORS)}, each once")
+    return names
+
+
+def regressions(names: tuple[str, ...], now: GridSample,
+                before: GridSample | None) -> dict[str, Regression] | None:
+    """(phi, y) of each named generator; None when one cannot run on this sample (it needs
+    the sample before and there is none, or a value it takes is not finite)."""
+    found = {}
+    for name in names:
+        generator = GENERATORS[name]
+        if generator.needs_previous and before is None:
+            return None
+        phi, y = generator.regression(now, before)
+        if not (np.all(np.isfinite(phi)) and math.isfinite(y)):
+            return None
+        found[name] = (phi, float(y))
+    return found

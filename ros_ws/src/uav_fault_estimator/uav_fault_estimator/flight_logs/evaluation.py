@@ -1,0 +1,132 @@
+"""A screening held against the ground truth (ground_truth.py): per flight whether and when
+the detector's combined alarm saw the failure, on which channel, and what it raised before;
+over flights the counts ALFA's authors and Keipour et al. report. No ROS here.
+
+Counted per flight, each flight once:
+- a failure flight whose first combined alarm comes at or after the onset: a true positive
+  (tp), its delay the time from the onset to that alarm;
+- a failure flight with a combined alarm before its onset: a false positive (fp), whatever
+  follows (the alarm was raised on a healthy aircraft);
+- a failure flight without a combined alarm: a false negative (fn);
+- a flight without failure: fp with any combined alarm, else a true negative (tn).
+precision tp / (tp + fp), recall tp / (tp + fn), accuracy (tp + tn) / flights.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from uav_fault_estimator.detection.detector import DetectorSample
+from uav_fault_estimator.flight_logs.ground_truth import FlightTruth
+from uav_fault_estimator.flight_logs.screening import COMBINED, TIME_DECIMALS, channel_alarms
+
+
+@dataclass(frozen=True)
+class FlightOutcome:
+    """One flight against its truth: flight (the log's name), failure and onset_stamp_s (the
+    truth), first_alarm_stamp_s and first_alarm_channel (the first combined alarm at or
+    after the onset, or anywhere in a flight without failure; stamps in the log's clock [s]),
+    alarms_before_onset (combined-alarm samples before the onset; every one without a
+    failure), outcome (tp, fp, fn, tn), delay_s (onset to first alarm, tp only),
+    right_channel (whether the first alarm's channel is one the failure acts on; tp only),
+    flown_after_onset_s (how much log follows the onset) and end_stamp_s (the last sample)."""
+
+    flight: str
+    failure: str | None
+    onset_stamp_s: float | None
+    first_alarm_stamp_s: float | None
+    first_alarm_channel: str | None
+    alarms_before_onset: int
+    outcome: str
+    delay_s: float | None
+    right_channel: bool | None
+    flown_after_onset_s: float | None
+    end_stamp_s: float
+
+
+def flight_outcome(flight: str, truth: FlightTruth, samples: Sequence[DetectorSample],
+                   channels: Sequence[str], start_stamp_s: float) -> FlightOutcome:
+    """The outcome of one screened flight: its detector samples (times from the log's start,
+    start_stamp_s that start in the log's clock [s]), channels the order of their arrays."""
+    stamps_s = start_stamp_s + np.array([sample.time_s for sample in samples])
+    raised = channel_alarms(samples, len(channels))[COMBINED]
+    alarmed = raised.any(axis=1)
+    onset = truth.onset_stamp_s
+    before = alarmed & (stamps_s < onset) if onset is not None else alarmed
+    after = np.flatnonzero(alarmed & (stamps_s >= onset)) if onset is not None else (
+        np.flatnonzero(alarmed))
+    first = int(after[0]) if after.size else None
+    channel = channels[int(np.argmax(raised[first]))] if first is not None else None
+    if onset is None:
+        outcome = "fp" if alarmed.any() else "tn"
+    else:
+        outcome = "fp" if before.any() else ("tp" if first is not None else "fn")
+    end_stamp_s = float(stamps_s[-1]) if stamps_s.size else start_stamp_s
+    return FlightOutcome(
+        flight=flight, failure=truth.failure, onset_stamp_s=onset,
+        first_alarm_stamp_s=None if first is None else _stamp(stamps_s[first]),
+        first_alarm_channel=channel, alarms_before_onset=int(before.sum()), outcome=outcome,
+        delay_s=_stamp(stamps_s[first] - onset) if outcome == "tp" else None,
+        right_channel=channel in truth.expected_channels if outcome == "tp" else None,
+        flown_after_onset_s=None if onset is None else _stamp(end_stamp_s - onset),
+        end_stamp_s=_stamp(end_stamp_s))
+
+
+def _stamp(value: float) -> float:
+    return round(float(value), TIME_DECIMALS)
+
+
+def evaluation_summary(outcomes: Sequence[FlightOutcome]) -> dict[str, Any]:
+    """The counts over flights (the module's docstring), the delays of the true positives
+    [s] (mean and largest; None without any) and how many of them alarmed first on a
+    channel the failure acts on."""
+    counts = {kind: sum(o.outcome == kind for o in outcomes) for kind in ("tp", "fp", "fn", "tn")}
+    tp, fp, fn, tn = counts.values()
+    delays = [o.delay_s for o in outcomes if o.outcome == "tp"]
+    return {
+        **counts,
+        "precision": tp / (tp + fp) if tp + fp else None,
+        "recall": tp / (tp + fn) if tp + fn else None,
+        "accuracy": (tp + tn) / len(outcomes) if outcomes else None,
+        "mean_delay_s": _stamp(np.mean(delays)) if delays else None,
+        "max_delay_s": _stamp(max(delays)) if delays else None,
+        "right_channel": sum(bool(o.right_channel) for o in outcomes),
+    }
+
+
+def outcome_dict(outcome: FlightOutcome) -> dict[str, Any]:
+    """The outcome as JSON-ready data."""
+    return asdict(outcome)
+
+
+OUTCOME_HEADING = (f"{'flight':<58} {'failure':<9} {'outcome':<7} {'delay_s':>7} "
+                   f"{'channel':<10} {'before':>6} {'after_s':>7}")
+
+
+def outcome_line(outcome: FlightOutcome) -> str:
+    """One flight as a line of the evaluation table (OUTCOME_HEADING)."""
+    delay = "" if outcome.delay_s is None else f"{outcome.delay_s:.1f}"
+    after = "" if outcome.flown_after_onset_s is None else f"{outcome.flown_after_onset_s:.1f}"
+    return (f"{outcome.flight:<58} {outcome.failure or '-':<9} {outcome.outcome:<7} "
+            f"{delay:>7} {outcome.first_alarm_channel or '-':<10} "
+            f"{outcome.alarms_before_onset:>6} {after:>7}")
+
+
+def summary_line(summary: dict[str, Any]) -> str:
+    """The summary in one line."""
+    def percent(value: float | None) -> str:
+        return "-" if value is None else f"{100 * value:.1f} %"
+
+    def seconds(value: float | None) -> str:
+        return "-" if value is None else f"{value:.1f} s"
+
+    return (f"tp {summary['tp']}, fp {summary['fp']}, fn {summary['fn']}, tn {summary['tn']}; "
+            f"precision {percent(summary['precision'])}, recall {percent(summary['recall'])}, "
+            f"accuracy {percent(summary['accuracy'])}; delay mean "
+            f"{seconds(summary['mean_delay_s'])}, largest {seconds(summary['max_delay_s'])}; "
+            f"first alarm on the failed part's channel {summary['right_channel']} of "
+            f"{summary['tp']}")

@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""The detector benchmarked on ALFA's real flights (docs/flight_logs.md, "Benchmark").
+
+    python scripts/alfa_benchmark.py ALFA_FOLDER [--calibrate-on FOLDER] [--json FILE]
+        [--airframe FILE] [--generators NAMES] [--schedule auto|none]
+        [--false-alarm-probability 0.01]
+
+ALFA_FOLDER holds flight folders in ALFA's processed layout (../shared/alfa/flights). Each
+labelled flight is read with the airframe (default the shipped carbon_z_alfa.yaml), its
+truth from its failure_status files; an unlabelled one (no_ground_truth) is left out, said.
+Without --calibrate-on: leave one flight out, each flight screened with a calibration from
+the fault-free parts of all the others (flight_logs.benchmark). With it: one calibration
+from the fault-free parts of FOLDER's flights, every flight of ALFA_FOLDER screened with it.
+Calibrations use detector_node's window and forgetting factor and the named generators
+(default: the roll and pitch tracking pair and the propulsion channel, which read the
+autopilot's intent, not the servo outputs ALFA's injection pins). --schedule auto schedules
+the parameters on airspeed (the ground speed less the wind where the log has no airspeed)
+when the calibration flights span enough of it.
+
+Prints a line per flight and the summary; --json writes DESIGN.md's benchmark record
+(`flights`, `summary`, and the settings). Exit status 0; 2 bad input (one line); 1 otherwise.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from uav_common.package_data import config_path, default_parameters
+from uav_fault_estimator.detection.calibration import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_SETTLE_S,
+    Calibration,
+)
+from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.detection.detector import DetectorFlight
+from uav_fault_estimator.flight_logs.benchmark import (
+    ONSET_MARGIN_S,
+    LabelledFlight,
+    calibrated_on,
+    leave_one_out,
+)
+from uav_fault_estimator.flight_logs.evaluation import (
+    OUTCOME_HEADING,
+    evaluation_summary,
+    outcome_dict,
+    outcome_line,
+    summary_line,
+)
+from uav_fault_estimator.flight_logs.ground_truth import alfa_truth, is_alfa_flight
+from uav_fault_estimator.flight_logs.readers import log_paths
+from uav_fault_estimator.flight_logs.replay import load_replay
+
+PROGRAM = "alfa_benchmark.py"
+ALFA_GENERATORS = ("roll_tracking", "pitch_tracking", "propulsion")
+DEFAULT_AIRFRAME = config_path("uav_fault_estimator", "airframes/carbon_z_alfa.yaml")
+
+
+class BadInputError(Exception):
+    """Input the user must mend: exit status 2 with the message as one line."""
+
+
+def labelled_flights(folder: Path, airframe: Path) -> list[LabelledFlight]:
+    """The labelled ALFA flights in folder on the detector's grid; the unlabelled said and
+    left out. BadInputError for a folder without ALFA flights or a flight that cannot be read."""
+    try:
+        paths = [path for path in log_paths([folder]) if is_alfa_flight(path)]
+        if not paths:
+            raise BadInputError(f"{folder}: no ALFA flight folder in it")
+        flights = []
+        for path in paths:
+            truth = alfa_truth(path)
+            if not truth.labelled:
+                print(f"left out, unlabelled: {path.name}")
+                continue
+            replay = load_replay(path, airframe, None, DEFAULT_SAMPLE_PERIOD_S)
+            flights.append(LabelledFlight(path.name, replay.inputs, truth))
+    except ValueError as error:
+        raise BadInputError(str(error)) from None
+    return flights
+
+
+def calibrator(arguments: argparse.Namespace, airframe_name: str):
+    """calibrate(fault-free parts) -> Calibration with the benchmark's settings."""
+    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
+
+    def calibrated(flights: Sequence[DetectorFlight]) -> Calibration:
+        def made(scheduled: bool) -> Calibration:
+            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
+                             node["window"], DEFAULT_SETTLE_S, airframe=airframe_name,
+                             scheduled=scheduled, generators=arguments.generators)
+        if arguments.schedule == "auto":
+            try:
+                return made(True)
+            except ValueError:  # too narrow a span of airspeeds: no schedule
+                pass
+        return made(False)
+
+    return calibrated
+
+
+def run(arguments: argparse.Namespace) -> dict:
+    """The benchmark's record (printed as it goes)."""
+    started = time.monotonic()
+    flights = labelled_flights(arguments.alfa_folder, arguments.airframe)
+    calibrated = calibrator(arguments, "carbon_z_alfa")
+    try:
+        if arguments.calibrate_on is None:
+            outcomes = leave_one_out(flights, calibrated, arguments.false_alarm_probability)
+        else:
+            calibration_flights = labelled_flights(arguments.calibrate_on, arguments.airframe)
+            outcomes = calibrated_on(calibration_flights, flights, calibrated,
+                                     arguments.false_alarm_probability)
+    except ValueError as error:  # a generator without samples to fit it on
+        raise BadInputError(str(error)) from None
+    summary = evaluation_summary(outcomes)
+    print(OUTCOME_HEADING)
+    print("\n".join(map(outcome_line, outcomes)))
+    print(summary_line(summary))
+    return {
+        "alfa_folder": str(arguments.alfa_folder),
+        "mode": ("leave_one_flight_out" if arguments.calibrate_on is None
+                 else f"calibrated_on {arguments.calibrate_on}"),
+        "generators": list(arguments.generators),
+        "schedule": arguments.schedule,
+        "false_alarm_probability": arguments.false_alarm_probability,
+        "onset_margin_s": ONSET_MARGIN_S,
+        "wall_time_s": round(time.monotonic() - started, 1),
+        "flights": [outcome_dict(outcome) for outcome in outcomes],
+        "summary": summary,
+    }
+
+
+def parser() -> argparse.ArgumentParser:
+    top = argparse.ArgumentParser(prog=PROGRAM, description=__doc__.splitlines()[0])
+    top.add_argument("alfa_folder", type=Path, metavar="ALFA_FOLDER")
+    top.add_argument("--calibrate-on", type=Path, default=None, metavar="FOLDER")
+    top.add_argument("--json", type=Path, default=None, metavar="FILE")
+    top.add_argument("--airframe", type=Path, default=DEFAULT_AIRFRAME)
+    top.add_argument("--generators", type=lambda text: tuple(
+        name.strip() for name in text.split(",") if name.strip()), default=ALFA_GENERATORS)
+    top.add_argument("--schedule", choices=("auto", "none"), default="auto")
+    top.add_argument("--false-alarm-probability", type=float, default=0.01)
+    return top
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    arguments = parser().parse_args(argv)
+    try:
+        record = run(arguments)
+        if arguments.json is not None:
+            arguments.json.write_text(json.dumps(record, indent=2) + "\n")
+    except BadInputError as error:
+        print(f"{PROGRAM}: {error}", file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f"{PROGRAM}: cannot write {arguments.json}: {error.strerror}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
