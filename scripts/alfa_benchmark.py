@@ -3,7 +3,7 @@
 
     python scripts/alfa_benchmark.py ALFA_FOLDER [--calibrate-on FOLDER] [--json FILE]
         [--airframe FILE] [--generators NAMES] [--schedule auto|none]
-        [--false-alarm-probability 0.01]
+        [--false-alarm-probability 0.01] [--forgetting-factor F] [--window M] [--settle-s S]
 
 ALFA_FOLDER holds flight folders in ALFA's processed layout (../shared/alfa/flights). Each
 labelled flight is read with the airframe (default the shipped carbon_z_alfa.yaml), its
@@ -11,7 +11,9 @@ truth from its failure_status files; an unlabelled one (no_ground_truth) is left
 Without --calibrate-on: leave one flight out, each flight screened with a calibration from
 the fault-free parts of all the others (flight_logs.benchmark). With it: one calibration
 from the fault-free parts of FOLDER's flights, every flight of ALFA_FOLDER screened with it.
-Calibrations use detector_node's window and forgetting factor and the named generators
+Calibrations use detector_node's window and forgetting factor unless given (a calibration
+made with others is for screening offline: detector_node refuses it), DEFAULT_SETTLE_S
+unless --settle-s is given, and the named generators
 (default: the roll and pitch tracking pair and the propulsion channel, which read the
 autopilot's intent, not the servo outputs ALFA's injection pins). --schedule auto schedules
 the parameters on airspeed (the ground speed less the wind where the log has no airspeed)
@@ -86,12 +88,10 @@ def labelled_flights(folder: Path, airframe: Path) -> list[LabelledFlight]:
 
 def calibrator(arguments: argparse.Namespace, airframe_name: str):
     """calibrate(fault-free parts) -> Calibration with the benchmark's settings."""
-    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
-
     def calibrated(flights: Sequence[DetectorFlight]) -> Calibration:
         def made(scheduled: bool) -> Calibration:
-            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
-                             node["window"], DEFAULT_SETTLE_S, airframe=airframe_name,
+            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, arguments.forgetting_factor,
+                             arguments.window, arguments.settle_s, airframe=airframe_name,
                              scheduled=scheduled, generators=arguments.generators)
         if arguments.schedule == "auto":
             try:
@@ -128,6 +128,9 @@ def run(arguments: argparse.Namespace) -> dict:
         "generators": list(arguments.generators),
         "schedule": arguments.schedule,
         "false_alarm_probability": arguments.false_alarm_probability,
+        "forgetting_factor": arguments.forgetting_factor,
+        "window": arguments.window,
+        "settle_s": arguments.settle_s,
         "onset_margin_s": ONSET_MARGIN_S,
         "wall_time_s": round(time.monotonic() - started, 1),
         "flights": [outcome_dict(outcome) for outcome in outcomes],
@@ -145,6 +148,10 @@ def parser() -> argparse.ArgumentParser:
         name.strip() for name in text.split(",") if name.strip()), default=ALFA_GENERATORS)
     top.add_argument("--schedule", choices=("auto", "none"), default="auto")
     top.add_argument("--false-alarm-probability", type=float, default=0.01)
+    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
+    top.add_argument("--forgetting-factor", type=float, default=node["forgetting_factor"])
+    top.add_argument("--window", type=int, default=node["window"])
+    top.add_argument("--settle-s", type=float, default=DEFAULT_SETTLE_S)
     return top
 
 

@@ -160,17 +160,16 @@ def test_a_calibration_learns_up_to_the_onset_less_the_margin(exports) -> None:
 def test_the_tracking_and_propulsion_generators_regress_as_documented() -> None:
     state, controls = np.zeros(14), np.zeros(7)
     state[[3, 4, 9, 10]] = [0.1, 0.05, 0.2, -0.1]  # roll, pitch [rad]; p, q [rad/s]
-    state[[6, 7]] = [20.0, 0.0]  # ground velocity north, east [m/s]
+    state[[6, 7, 8]] = [20.0, 0.0, -1.0]  # ground velocity north, east, down [m/s]
     controls[4] = 0.6  # throttle
-    before = GridSample(state.copy(), controls, math.nan, np.array([0.3, 0.0]), 0.2)
-    state[6] = 20.4
-    now = GridSample(state, controls, math.nan, np.array([0.3, 0.15]), 0.2)
-    found = regressions(("roll_tracking", "pitch_tracking", "propulsion"), now, before)
+    now = GridSample(state, controls, np.array([0.3, 0.15]))
+    found = regressions(("roll_tracking", "pitch_tracking", "propulsion"), now, None)
     np.testing.assert_allclose(found["roll_tracking"][0], [0.2, 1.0])
     assert found["roll_tracking"][1] == 0.2
     np.testing.assert_allclose(found["pitch_tracking"][0], [0.1, 1.0])
-    np.testing.assert_allclose(found["propulsion"][0], [0.6, math.sin(0.05), 20.4, 1.0])
-    assert found["propulsion"][1] == pytest.approx(2.0)  # 0.4 m/s in 0.2 s
-    assert regressions(("propulsion",), now, None) is None  # needs the sample before
-    unknown = GridSample(state, controls, math.nan, np.full(2, math.nan), 0.2)
-    assert regressions(("roll_tracking",), unknown, before) is None
+    np.testing.assert_allclose(found["propulsion"][0],
+                               [1.0 / math.hypot(20.0, 1.0), 1.0 / math.cos(0.1) ** 2 - 1.0, 1.0])
+    assert found["propulsion"][1] == 0.6
+    assert regressions(("yaw",), now, None) is None  # r[k-1] needed
+    unknown = GridSample(state, controls, np.full(2, math.nan))
+    assert regressions(("roll_tracking",), unknown, now) is None

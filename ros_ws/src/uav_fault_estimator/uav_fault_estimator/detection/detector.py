@@ -91,13 +91,13 @@ class RegressionFeed:
         self.started_s: float | None = None  # the first usable sample's time [s]
 
     def step(self, time_s: float, state: np.ndarray, controls: np.ndarray,
-             airspeed_mps: float, setpoint_rad: np.ndarray) -> dict[str, Regression] | None:
+             setpoint_rad: np.ndarray) -> dict[str, Regression] | None:
         """Each generator's (phi, y) for this sample; None off the grid, for the first
         sample when a generator needs the sample before, and for a sample with a non-finite
         value a generator takes (then the next sample has no sample before)."""
         if not on_grid(time_s, self.period_s):
             return None
-        now = GridSample(state, controls, airspeed_mps, setpoint_rad, self.period_s)
+        now = GridSample(state, controls, setpoint_rad)
         regression = regressions(self.generators, now, self.previous)
         if regression is None:
             self.skipped_samples += 1
@@ -117,8 +117,8 @@ def flight_regressions(flight: Sequence[np.ndarray], generators: tuple[str, ...]
     """Every usable sample's regressions over one flight (DetectorFlight, or (times, states,
     controls) without airspeed), as the detector forms them."""
     feed = RegressionFeed(generators, period_s)
-    for sample in flight_samples(flight):
-        regression = feed.step(*sample)
+    for time_s, state, controls, _, setpoint_rad in flight_samples(flight):
+        regression = feed.step(time_s, state, controls, setpoint_rad)
         if regression is not None:
             yield regression
 
@@ -181,12 +181,12 @@ class SelfTuningDetector:
                airspeed_mps: float = math.nan,
                setpoint_rad: np.ndarray = NO_SETPOINT) -> DetectorSample | None:
         """One sample (state and controls arrays, uav_common.channels order; the airspeed
-        [m/s], which an airspeed schedule and the propulsion generator use: with a schedule
-        and none known yet, no parameter test; the commanded roll and pitch [rad], which the
-        tracking generators take). None off the grid, for the first sample when a generator
+        [m/s], which only an airspeed schedule uses: with one and none known yet, no
+        parameter test; the commanded roll and pitch [rad], which the tracking generators
+        take). None off the grid, for the first sample when a generator
         needs the sample before, and for a sample with a non-finite value a generator takes
         (skipped: the RLS keeps its parameters, and the next sample has no sample before)."""
-        regression = self.feed.step(time_s, state, controls, airspeed_mps, setpoint_rad)
+        regression = self.feed.step(time_s, state, controls, setpoint_rad)
         if regression is None:
             return None
         airspeed_offset_mps = self.airspeed_offset_mps(airspeed_mps)

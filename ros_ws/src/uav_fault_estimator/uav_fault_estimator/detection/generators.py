@@ -13,11 +13,14 @@ setpoints, and the propulsion channel the along-track dynamics:
 
     roll_tracking   p[k] = a (phi_c[k] - phi[k]) + b           the roll loop's response
     pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b       the pitch loop's response
-    propulsion      (V[k] - V[k-1]) / T = a throttle[k] + b sin(theta[k]) + c V[k] + d
+    propulsion      throttle[k] = a sin(gamma[k]) + b (1 / cos(phi[k])^2 - 1) + c
 
 p, q, r body rates [rad/s]; da aileron, de elevator [rad]; phi, theta roll and pitch and
-phi_c, theta_c their setpoints [rad]; V the speed through the air [m/s] (the airspeed, or
-the horizontal ground speed where none is known), T the sample period [s]; throttle 0..1.
+phi_c, theta_c their setpoints [rad]; throttle 0..1; gamma the flight-path angle from the
+ground velocity. The propulsion channel is the throttle the autopilot needs to hold its
+speed, against the climb it flies and the load factor of its turns (n^2 - 1, the induced
+drag's share): a loss of thrust raises the throttle needed (c, and the residual). Where the
+failure cuts the throttle output itself (ALFA's engine failures), it reads the injection.
 No ROS here.
 """
 
@@ -33,28 +36,20 @@ from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 
 _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
 _ROLL, _PITCH = STATE_CHANNELS.index("roll"), STATE_CHANNELS.index("pitch")
-_VN, _VE = STATE_CHANNELS.index("velocity_north"), STATE_CHANNELS.index("velocity_east")
+_VN, _VE, _VD = (STATE_CHANNELS.index(name)
+                  for name in ("velocity_north", "velocity_east", "velocity_down"))
 _AILERON, _ELEVATOR, _THROTTLE = (CONTROL_CHANNELS.index(name)
                                   for name in ("aileron", "elevator", "throttle"))
+MIN_SPEED_MPS = 1.0  # below it the flight-path angle is not defined: the aircraft stands
 
 
 class GridSample(NamedTuple):
     """One sample on the detector's grid: state (14,) and controls (7,) in uav_common.channels
-    order, airspeed_mps [m/s] (NaN unknown), setpoint_rad (2,) commanded roll and pitch
-    [rad] (NaN unknown), period_s the grid's period [s]."""
+    order, setpoint_rad (2,) commanded roll and pitch [rad] (NaN unknown)."""
 
     state: np.ndarray
     controls: np.ndarray
-    airspeed_mps: float
     setpoint_rad: np.ndarray
-    period_s: float
-
-    @property
-    def speed_mps(self) -> float:
-        """The speed through the air [m/s]: the airspeed, else the horizontal ground speed."""
-        if math.isfinite(self.airspeed_mps):
-            return self.airspeed_mps
-        return math.hypot(self.state[_VN], self.state[_VE])
 
 
 # (phi, y) of a generator from this sample and the one before (None: not known)
@@ -93,11 +88,11 @@ def _pitch_tracking(now: GridSample, before: GridSample | None) -> Regression:
     return np.array([_angle_rad(now.setpoint_rad[1] - now.state[_PITCH]), 1.0]), now.state[_Q]
 
 
-def _propulsion(now: GridSample, before: GridSample) -> Regression:
-    speed_mps = now.speed_mps
-    acceleration_mps2 = (speed_mps - before.speed_mps) / now.period_s
-    return (np.array([now.controls[_THROTTLE], math.sin(now.state[_PITCH]), speed_mps, 1.0]),
-            acceleration_mps2)
+def _propulsion(now: GridSample, before: GridSample | None) -> Regression:
+    velocity_mps = now.state[[_VN, _VE, _VD]]
+    climb = -velocity_mps[2] / max(float(np.linalg.norm(velocity_mps)), MIN_SPEED_MPS)
+    load = 1.0 / math.cos(now.state[_ROLL]) ** 2 - 1.0
+    return np.array([climb, load, 1.0]), now.controls[_THROTTLE]
 
 
 def _angle_rad(angle_rad: float) -> float:
@@ -111,7 +106,7 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("yaw", ("a_ra", "b_ra", "c_ra"), True, _yaw),
     Generator("roll_tracking", ("a_rt", "b_rt"), False, _roll_tracking),
     Generator("pitch_tracking", ("a_pt", "b_pt"), False, _pitch_tracking),
-    Generator("propulsion", ("a_vt", "b_vt", "c_vt", "d_vt"), True, _propulsion),
+    Generator("propulsion", ("a_tg", "b_tn", "c_t"), False, _propulsion),
 )}
 # The paper's three: the simulated Aerosonde's shipped calibration.
 SURFACE_GENERATORS = ("roll", "pitch", "yaw")

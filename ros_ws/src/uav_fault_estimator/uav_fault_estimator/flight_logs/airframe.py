@@ -37,11 +37,14 @@ clipped to 0..1.
 
 Mixed outputs: an output that carries a scaled copy of another's command (a second aileron
 servo, often reversed), (pwm_us - trim_us) = factor * (of_pwm_us - trim_us) with the trim of
-the surface that of_output drives (0 for normalised outputs). The detector needs one
-deflection per surface, and a copy commands nothing new, so a copy is not read for the
-deflections: it is checked against the log (mixed_output_mismatches), which tells a right
-airframe file from a wrong channel assignment. Elevons and other true mixes of two surfaces
-are not expressed.
+the surface that of_output drives (0 for normalised outputs). A copy commands nothing new;
+it is checked against the log (mixed_output_mismatches), which tells a right airframe file
+from a wrong channel assignment, and it takes part in the vote for the surface's command: a
+surface with two copies or more is commanded by the median of what its outputs imply
+(intended_raw), so that one output pinned by a failure (ALFA injects a jammed surface so, a
+servo fault would too) is outvoted by the others and the generators see what the autopilot
+intended, not the injection. With one copy the surface's own output is read (two sources
+cannot tell which is wrong). Elevons and other true mixes of two surfaces are not expressed.
 """
 
 from __future__ import annotations
@@ -236,17 +239,41 @@ def _raw(outputs: TimedSeries, output: int, log: FlightLog, airframe: Airframe) 
     return outputs.values[:, outputs.columns.index(column)]
 
 
+# Sources a vote needs: the surface's own output and two copies (a median of two is their
+# mean, which a pinned output would halve).
+VOTING_SOURCES = 3
+
+
+def intended_raw(outputs: TimedSeries, control: OutputMap, log: FlightLog,
+                 airframe: Airframe) -> np.ndarray:
+    """The control's command (n,) in raw output units: its own output, or with at least
+    VOTING_SOURCES - 1 copies in the log (mixed) the median of its output and each copy's
+    implied original, zero + (copy - zero) / factor (NaN-aware, per sample)."""
+    own = _raw(outputs, control.output, log, airframe)
+    copies = [mixed for mixed in airframe.mixed if mixed.of_output == control.output
+              and output_column(mixed.output) in outputs.columns]
+    if 1 + len(copies) < VOTING_SOURCES:
+        return own
+    implied = [control.zero + (_raw(outputs, mixed.output, log, airframe) - control.zero)
+               / mixed.factor for mixed in copies]
+    sources = np.column_stack([own, *implied])
+    voted = np.full(own.shape, np.nan)
+    known = np.isfinite(sources).any(axis=1)
+    voted[known] = np.nanmedian(sources[known], axis=1)
+    return voted
+
+
 def surface_deflections(log: FlightLog, airframe: Airframe) -> TimedSeries:
     """The SURFACES stream (aileron, elevator, rudder [rad], throttle [0..1]) at the OUTPUTS
-    stream's instants, through the airframe's maps; NaN for a control the airframe does not
-    give. ValueError (one line) for a log without outputs, with outputs of another unit, or
-    without an output the airframe maps."""
+    stream's instants, through the airframe's maps (each control's intended_raw); NaN for a
+    control the airframe does not give. ValueError (one line) for a log without outputs,
+    with outputs of another unit, or without an output the airframe maps."""
     outputs = _outputs(log, airframe)
     values = np.full((outputs.times_s.size, len(CONTROLS)), np.nan)
     for index, name in enumerate(CONTROLS):
         if name in airframe.controls:
             control = airframe.controls[name]
-            values[:, index] = control.value(_raw(outputs, control.output, log, airframe))
+            values[:, index] = control.value(intended_raw(outputs, control, log, airframe))
     throttle = CONTROLS.index(THROTTLE)
     values[:, throttle] = np.clip(values[:, throttle], 0.0, 1.0)  # NaN stays NaN
     return TimedSeries(outputs.times_s, values, CONTROLS)
