@@ -40,6 +40,7 @@ from uav_fault_estimator.detection.calibration import (
 )
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight
+from uav_fault_estimator.detection.generators import generator_names
 from uav_fault_estimator.flight_logs.benchmark import (
     ONSET_MARGIN_S,
     LabelledFlight,
@@ -144,8 +145,7 @@ def parser() -> argparse.ArgumentParser:
     top.add_argument("--calibrate-on", type=Path, default=None, metavar="FOLDER")
     top.add_argument("--json", type=Path, default=None, metavar="FILE")
     top.add_argument("--airframe", type=Path, default=DEFAULT_AIRFRAME)
-    top.add_argument("--generators", type=lambda text: tuple(
-        name.strip() for name in text.split(",") if name.strip()), default=ALFA_GENERATORS)
+    top.add_argument("--generators", type=generator_names, default=ALFA_GENERATORS)
     top.add_argument("--schedule", choices=("auto", "none"), default="auto")
     top.add_argument("--false-alarm-probability", type=float, default=0.01)
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")

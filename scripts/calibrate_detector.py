@@ -27,6 +27,7 @@ from uav_common.package_data import default_parameters
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S, DEFAULT_SETTLE_S
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
 from uav_fault_estimator.offline import (
     describe_flights,
     fault_free_flights,
@@ -63,6 +64,8 @@ def main() -> int:
     parser.add_argument("--bags", type=Path, nargs="+",
                         help="recordings of fault-free flights to calibrate from, not flying")
     parser.add_argument("--out", type=Path, default=PACKAGE / "config/detector_calibration.yaml")
+    parser.add_argument("--generators", type=generator_names, default=SURFACE_GENERATORS,
+                        help="comma-separated (detection/generators.py; default roll,pitch,yaw)")
     arguments = parser.parse_args()
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     started = time.monotonic()
@@ -70,7 +73,8 @@ def main() -> int:
         flights, header = (recorded(arguments.bags) if arguments.bags
                            else simulated(arguments.flights))
         calibration = calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
-                                node["window"], DEFAULT_SETTLE_S)
+                                node["window"], DEFAULT_SETTLE_S,
+                                generators=arguments.generators)
     except (ValueError, FileNotFoundError) as error:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)
         return 1

@@ -61,7 +61,7 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import run_detector
-from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
 from uav_fault_estimator.flight_logs.airframe import Airframe, load_airframe
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
 from uav_fault_estimator.flight_logs.evaluation import (
@@ -138,11 +138,6 @@ def load_logs(paths: Sequence[Path], airframe: Airframe, period_s: float,
     except ValueError as error:
         raise BadInputError(str(error)) from None
     return logs
-
-
-def generator_names(text: str) -> tuple[str, ...]:
-    """--generators: names separated by commas."""
-    return tuple(name.strip() for name in text.split(",") if name.strip())
 
 
 def calibrate_logs(arguments: argparse.Namespace) -> None:

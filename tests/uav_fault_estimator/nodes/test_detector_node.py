@@ -8,10 +8,12 @@ import subprocess
 
 import numpy as np
 import pytest
+import yaml
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.calibration_file import calibration_to_dict
+from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import SelfTuningDetector, run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_fault_estimator.offline import fly_on_grid
@@ -20,16 +22,26 @@ from uav_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.integration
 
+GENERATORS = (*SURFACE_GENERATORS, "propulsion")
+
 DURATION_S = 60.0  # the RLS settles after 30 s: half of the flight is tested
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(180)
-def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, start_process):
-    alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
-    start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
-    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
+def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, start_process,
+                                                        tmp_path):
+    """With a calibration of four generators (the paper's three and propulsion), made from
+    the flight itself: the node's channels are the calibration's, its numbers the core's."""
     scenario = short_scenario(DURATION_S)
+    flight = fly_on_grid(load_scenario(scenario), 0.2)[:3]
+    calibration = calibrate([flight], 0.2, 0.995, 25, 30.0, generators=GENERATORS)
+    calibration_file = tmp_path / "calibration.yaml"
+    calibration_file.write_text(yaml.safe_dump(calibration_to_dict(calibration), sort_keys=False))
+    alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
+    start_process(ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=[
+        "-p", f"calibration_file:={calibration_file}"]), "detector_node")
+    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
         scenario, subscribers=1)), "sim_node")
     assert sim.wait(timeout_s=90) == 0, sim.output()
@@ -38,12 +50,14 @@ def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, st
 
     stamps = np.array([stamp_seconds(m.header.stamp) for m in alarms])
     np.testing.assert_allclose(stamps, 0.2 * np.arange(1, expected + 1), atol=1e-9)
-    assert all(list(m.channel_names) == list(SURFACE_GENERATORS) for m in alarms)
+    assert {tuple(m.channel_names) for m in alarms} == {GENERATORS}
     # the same numbers as the core's offline run of the same flight
-    calibration = load_calibration("", window=25, forgetting_factor=0.995)
-    offline = run_detector(calibration, fly_on_grid(load_scenario(scenario), 0.2)[:3], 0.01)
+    offline = run_detector(calibration, flight, 0.01)
     np.testing.assert_allclose([m.statistic for m in alarms],
                                [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose([m.parameter_deviation for m in alarms],
+                               [s.parameter_deviation for s in offline], rtol=1e-9,
+                               equal_nan=True)
     assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
     detector = SelfTuningDetector(calibration, 0.01)
     np.testing.assert_allclose(alarms[-1].threshold, detector.thresholds, rtol=1e-12)

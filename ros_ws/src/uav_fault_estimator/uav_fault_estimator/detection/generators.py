@@ -112,6 +112,11 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
 SURFACE_GENERATORS = ("roll", "pitch", "yaw")
 
 
+def generator_names(text: str) -> tuple[str, ...]:
+    """Generator names as a command line gives them: separated by commas."""
+    return tuple(name.strip() for name in text.split(",") if name.strip())
+
+
 def checked_generators(names: tuple[str, ...]) -> tuple[str, ...]:
     """names when each is a generator's and none repeats; ValueError otherwise."""
     unknown = [name for name in names if name not in GENERATORS]

@@ -81,8 +81,8 @@ class DetectorNode(Node):
                                       math.nan if air_data is None else air_data[_AIRSPEED])
         if sample is None:  # off the grid, or skipped
             if self.detector.skipped_samples > skipped:
-                self.diagnostics.update(WARN, "sample skipped (first, or a rate or surface "
-                                        "missing or implausible)", self.health())
+                self.diagnostics.update(WARN, "sample skipped (first, or a value a generator "
+                                        "takes missing or implausible)", self.health())
             return
         self.publisher.publish(self.message(sample))
         self.counts["published"] += 1
