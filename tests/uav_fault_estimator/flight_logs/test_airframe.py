@@ -217,3 +217,29 @@ def test_mixed_outputs_are_checked_against_the_log(tmp_path):
                            "-1 x output_1 (off by 200 % of the throw at t = 3.00 s)")
     [line] = mixed_output_mismatches(outputs_log(np.arange(4.0), columns), airframe)
     assert "has no output_5" in line
+
+
+@pytest.mark.timeout(10)
+def test_a_surface_with_two_copies_is_commanded_by_their_vote(tmp_path):
+    """ALFA's aileron: output 5, its second servo output 6 and the rudder's mix output 4
+    (0.5 x). Each pinned in turn (one at a time) is outvoted; with one copy only, the
+    surface's own output is read even when pinned (two cannot tell which is wrong)."""
+    data = edited("mixed", [{"output": 5, "of_output": 1, "factor": -1.0},
+                            {"output": 6, "of_output": 1, "factor": 0.5}])
+    airframe = load_airframe(write(tmp_path, data))
+    command_us = np.array([1500.0, 1600.0, 1400.0, 1700.0])  # output 1's intended PWM
+    copies = {"output_5": 1500.0 - (command_us - 1500.0),
+              "output_6": 1500.0 + 0.5 * (command_us - 1500.0)}
+    others = {"output_2": [1520.0] * 4, "output_3": [1100.0] * 4, "output_4": [1480.0] * 4}
+    expected_rad = 0.4 * (command_us - 1500.0) / 400.0
+    for pinned in ("output_1", "output_5", "output_6"):
+        columns = {"output_1": command_us, **copies, **others}
+        columns[pinned] = np.full(4, 1500.0)  # a failure holds it at its trim
+        log = outputs_log([0.0, 0.1, 0.2, 0.3], dict(sorted(columns.items())))
+        aileron = surface_deflections(log, airframe).values[:, 0]
+        np.testing.assert_allclose(aileron, expected_rad, atol=1e-12, err_msg=pinned)
+        assert mixed_output_mismatches(log, airframe)  # the pinned output is still warned of
+    one_copy = load_airframe(write(tmp_path, PWM_AIRFRAME))
+    columns = {"output_1": np.full(4, 1500.0), "output_5": copies["output_5"], **others}
+    log = outputs_log([0.0, 0.1, 0.2, 0.3], dict(sorted(columns.items())))
+    np.testing.assert_allclose(surface_deflections(log, one_copy).values[:, 0], 0.0)
