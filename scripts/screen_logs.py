@@ -5,7 +5,7 @@ known (docs/flight_logs.md).
 
     python scripts/screen_logs.py calibrate FAULT_FREE_LOG... --airframe AIRFRAME.yaml \\
         --out CAL.yaml [--schedule auto|airspeed|none] [--generators roll,pitch,yaw]
-        [--truth TABLE.csv]
+        [--truth TABLE.csv] [--forgetting-factor F] [--window M] [--settle-s S]
     python scripts/screen_logs.py screen LOG... --calibration CAL.yaml \\
         --airframe AIRFRAME.yaml --out DIR [--false-alarm-probability 0.01] [--truth TABLE.csv]
 
@@ -25,7 +25,9 @@ summary.json, and the figure marks the onset.
 calibrate: calibration_fit.calibrate over the logs with the airframe's name and the named
 generators (detection.generators; default the paper's roll, pitch, yaw), on the grid of
 DEFAULT_SAMPLE_PERIOD_S, settling DEFAULT_SETTLE_S, with detector_node's window and
-forgetting factor (config/detector_node.yaml), so that detector_node takes the file too.
+forgetting factor (config/detector_node.yaml), so that detector_node takes the file too;
+--forgetting-factor, --window and --settle-s make one for screening with other settings
+(detector_node refuses it, screen takes it: a calibration carries its settings).
 --schedule auto (default): the parameters' means scheduled on airspeed when the logs'
 airspeeds span enough (calibration.MIN_SCHEDULE_SPAN_MPS), else a line saying why and no
 schedule; airspeed: a schedule or refuse; none: no schedule.
@@ -38,7 +40,7 @@ NAME is the log's file or folder name without its suffix.
 
 Exit status: 0 done; 2 bad input, one line (a missing or unreadable log, a folder without
 logs, two logs of one name, a bad airframe file or truth table, a calibration file that is
-malformed, for another airframe or for other detector settings, a schedule the logs cannot
+malformed or for another airframe, a schedule the logs cannot
 give, unknown generators, an output that cannot be written); 1 otherwise.
 """
 
@@ -58,7 +60,7 @@ from uav_fault_estimator.detection.calibration import (
     DEFAULT_SETTLE_S,
     Calibration,
 )
-from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
+from uav_fault_estimator.detection.calibration_file import calibration_to_dict, read_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
@@ -98,7 +100,7 @@ class BadInputError(Exception):
 
 def detector_settings() -> dict:
     """detector_node's parameters (config/detector_node.yaml): its window and forgetting
-    factor are what a calibration made here must match."""
+    factor are a calibration's defaults here, so that detector_node takes it."""
     return default_parameters("uav_fault_estimator", "detector_node.yaml")
 
 
@@ -145,7 +147,6 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
     started = time.monotonic()
     airframe = airframe_of(arguments.airframe)
     logs = load_logs(arguments.logs, airframe, DEFAULT_SAMPLE_PERIOD_S, arguments.truth)
-    node = detector_settings()
     unlabelled = [name for name, log in logs.items()
                   if log.truth is not None and not log.truth.labelled]
     if unlabelled:
@@ -157,8 +158,8 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
 
     def calibrated(scheduled: bool) -> Calibration:
         try:
-            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
-                             node["window"], DEFAULT_SETTLE_S, airframe=airframe.name,
+            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, arguments.forgetting_factor,
+                             arguments.window, arguments.settle_s, airframe=airframe.name,
                              scheduled=scheduled, generators=arguments.generators)
         except ValueError as error:
             if "airspeed" in str(error):  # the schedule's: the caller decides
@@ -194,10 +195,8 @@ def screen_logs(arguments: argparse.Namespace) -> None:
         raise BadInputError(f"--false-alarm-probability {arguments.false_alarm_probability:g}: "
                        "must lie between 0 and 1")
     airframe = airframe_of(arguments.airframe)
-    node = detector_settings()
     try:
-        calibration = load_calibration(str(arguments.calibration), node["window"],
-                                       node["forgetting_factor"], airframe.name)
+        calibration = read_calibration(str(arguments.calibration), airframe.name)
     except ValueError as error:
         raise BadInputError(str(error)) from None
     period_s = calibration.sample_period_s
@@ -270,6 +269,14 @@ def parser() -> argparse.ArgumentParser:
     calibrate_command.add_argument("--truth", type=Path, default=None,
                                    help="truth table: a failure log's part from its onset "
                                         "on is left out")
+    node = detector_settings()
+    calibrate_command.add_argument("--forgetting-factor", type=float,
+                                   default=node["forgetting_factor"],
+                                   help="lambda_f of the RLS (default detector_node's)")
+    calibrate_command.add_argument("--window", type=int, default=node["window"],
+                                   help="M, the GLRT window [samples] (default detector_node's)")
+    calibrate_command.add_argument("--settle-s", type=float, default=DEFAULT_SETTLE_S,
+                                   help="no test this long after a start [s]")
     calibrate_command.set_defaults(run=calibrate_logs)
     screen_command = commands.add_parser("screen", help="screen logs for alarms")
     screen_command.add_argument("logs", type=Path, nargs="+", metavar="LOG")

@@ -94,7 +94,7 @@ def test_an_airspeed_of_zero_throughout_is_none_and_said(exports, tmp_path: Path
 @pytest.mark.timeout(30)
 def test_the_truth_of_alfa_folders_and_of_a_table(exports, tmp_path: Path) -> None:
     assert alfa_truth(exports[1]) == FlightTruth("aileron", ONSET_NS * 1e-9)
-    assert alfa_truth(exports[1]).expected_channels == ("roll",)
+    assert alfa_truth(exports[1]).expected_channels == ("roll", "roll_tracking")
     assert alfa_truth(exports[0]) == NO_FAILURE
     unlabelled = tmp_path / "carbonZ_2018-07-18-12-10-11_no_ground_truth"
     unlabelled.mkdir()
@@ -158,18 +158,22 @@ def test_a_calibration_learns_up_to_the_onset_less_the_margin(exports) -> None:
 
 @pytest.mark.timeout(30)
 def test_the_tracking_and_propulsion_generators_regress_as_documented() -> None:
+    """Setpoints: roll 0.3, pitch 0.15 [rad], velocity down 0.5 [m/s]."""
     state, controls = np.zeros(14), np.zeros(7)
     state[[3, 4, 9, 10]] = [0.1, 0.05, 0.2, -0.1]  # roll, pitch [rad]; p, q [rad/s]
     state[[6, 7, 8]] = [20.0, 0.0, -1.0]  # ground velocity north, east, down [m/s]
     controls[4] = 0.6  # throttle
-    now = GridSample(state, controls, np.array([0.3, 0.15]))
-    found = regressions(("roll_tracking", "pitch_tracking", "propulsion"), now, None)
+    now = GridSample(state, controls, np.array([0.3, 0.15, 0.5]))
+    found = regressions(("roll_tracking", "pitch_tracking", "climb_tracking", "propulsion"),
+                        now, None)
     np.testing.assert_allclose(found["roll_tracking"][0], [0.2, 1.0])
     assert found["roll_tracking"][1] == 0.2
     np.testing.assert_allclose(found["pitch_tracking"][0], [0.1, 1.0])
+    np.testing.assert_allclose(found["climb_tracking"][0], [-0.5, 1.0])  # climb up [m/s]
+    assert found["climb_tracking"][1] == 1.0
     np.testing.assert_allclose(found["propulsion"][0],
                                [1.0 / math.hypot(20.0, 1.0), 1.0 / math.cos(0.1) ** 2 - 1.0, 1.0])
     assert found["propulsion"][1] == 0.6
     assert regressions(("yaw",), now, None) is None  # r[k-1] needed
-    unknown = GridSample(state, controls, np.full(2, math.nan))
+    unknown = GridSample(state, controls, np.full(3, math.nan))
     assert regressions(("roll_tracking",), unknown, now) is None

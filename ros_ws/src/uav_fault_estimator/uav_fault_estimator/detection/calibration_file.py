@@ -83,22 +83,15 @@ def shipped_calibration_path() -> Path:
     return config_path("uav_fault_estimator", CALIBRATION_FILE)
 
 
-def load_calibration(path: str, window: int, forgetting_factor: float,
-                     airframe: str = SIMULATED_AIRFRAME) -> Calibration:
-    """The calibration file (empty path: the shipped one), checked against the node's
-    window and forgetting factor and the airframe flown; ValueError with one line naming
-    the file."""
+def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibration:
+    """The calibration file (empty path: the shipped one), checked against the airframe
+    flown, with whatever window and forgetting factor it was made for (screening offline);
+    ValueError with one line naming the file."""
     file = Path(path) if path else shipped_calibration_path()
     try:
         calibration = calibration_from_dict(yaml.safe_load(file.read_text()))
     except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as error:
         raise ValueError(f"calibration file {file}: {type(error).__name__}: {error}") from None
-    if calibration.window != window or not math.isclose(calibration.forgetting_factor,
-                                                         forgetting_factor):
-        raise ValueError(
-            f"calibration file {file} was made for window {calibration.window} and "
-            f"forgetting factor {calibration.forgetting_factor}, not {window} and "
-            f"{forgetting_factor}: run scripts/calibrate_detector.py for these")
     if calibration.airframe != airframe:
         raise ValueError(
             f"calibration file {file} is for the airframe '{calibration.airframe}', not "
@@ -107,3 +100,16 @@ def load_calibration(path: str, window: int, forgetting_factor: float,
     return calibration
 
 
+def load_calibration(path: str, window: int, forgetting_factor: float,
+                     airframe: str = SIMULATED_AIRFRAME) -> Calibration:
+    """read_calibration, also checked against the node's window and forgetting factor;
+    ValueError with one line naming the file."""
+    calibration = read_calibration(path, airframe)
+    if calibration.window != window or not math.isclose(calibration.forgetting_factor,
+                                                         forgetting_factor):
+        file = Path(path) if path else shipped_calibration_path()
+        raise ValueError(
+            f"calibration file {file} was made for window {calibration.window} and "
+            f"forgetting factor {calibration.forgetting_factor}, not {window} and "
+            f"{forgetting_factor}: run scripts/calibrate_detector.py for these")
+    return calibration

@@ -29,23 +29,27 @@ from uav_fault_estimator.detection.change_detection import (
     SlidingGlrt,
     weibull_threshold,
 )
-from uav_fault_estimator.detection.generators import GridSample, Regression, regressions
+from uav_fault_estimator.detection.generators import (
+    NO_SETPOINTS,
+    SETPOINTS,
+    GridSample,
+    Regression,
+    regressions,
+)
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
-
-NO_SETPOINT = np.full(2, math.nan)
 
 
 class DetectorFlight(NamedTuple):
     """One flight on the detector's grid: times_s (K,) [s], states (K, 14) and controls
     (K, 7) in uav_common.channels order, airspeed_mps (K,) [m/s] (NaN where unknown; only an
-    airspeed schedule needs it), attitude_setpoint_rad (K, 2) the autopilot's commanded roll
-    and pitch [rad] (None or NaN where unknown)."""
+    airspeed schedule needs it), setpoints (K, 3) the autopilot's in generators.SETPOINTS
+    order (None or NaN where unknown)."""
 
     times_s: np.ndarray
     states: np.ndarray
     controls: np.ndarray
     airspeed_mps: np.ndarray
-    attitude_setpoint_rad: np.ndarray | None = None
+    setpoints: np.ndarray | None = None
 
 
 def detector_flight(flight: Sequence[np.ndarray]) -> DetectorFlight:
@@ -91,13 +95,13 @@ class RegressionFeed:
         self.started_s: float | None = None  # the first usable sample's time [s]
 
     def step(self, time_s: float, state: np.ndarray, controls: np.ndarray,
-             setpoint_rad: np.ndarray) -> dict[str, Regression] | None:
+             setpoints: np.ndarray) -> dict[str, Regression] | None:
         """Each generator's (phi, y) for this sample; None off the grid, for the first
         sample when a generator needs the sample before, and for a sample with a non-finite
         value a generator takes (then the next sample has no sample before)."""
         if not on_grid(time_s, self.period_s):
             return None
-        now = GridSample(state, controls, setpoint_rad)
+        now = GridSample(state, controls, setpoints)
         regression = regressions(self.generators, now, self.previous)
         if regression is None:
             self.skipped_samples += 1
@@ -117,17 +121,17 @@ def flight_regressions(flight: Sequence[np.ndarray], generators: tuple[str, ...]
     """Every usable sample's regressions over one flight (DetectorFlight, or (times, states,
     controls) without airspeed), as the detector forms them."""
     feed = RegressionFeed(generators, period_s)
-    for time_s, state, controls, _, setpoint_rad in flight_samples(flight):
-        regression = feed.step(time_s, state, controls, setpoint_rad)
+    for time_s, state, controls, _, setpoints in flight_samples(flight):
+        regression = feed.step(time_s, state, controls, setpoints)
         if regression is not None:
             yield regression
 
 
 def flight_samples(flight: Sequence[np.ndarray]) -> Iterator[tuple]:
-    """(time_s, state, controls, airspeed_mps, setpoint_rad) of each sample of a flight."""
+    """(time_s, state, controls, airspeed_mps, setpoints) of each sample of a flight."""
     flight = detector_flight(flight)
-    setpoints = (np.full((len(flight.times_s), 2), math.nan)
-                 if flight.attitude_setpoint_rad is None else flight.attitude_setpoint_rad)
+    setpoints = (np.full((len(flight.times_s), len(SETPOINTS)), math.nan)
+                 if flight.setpoints is None else flight.setpoints)
     yield from zip(*flight[:4], setpoints, strict=True)
 
 
@@ -179,14 +183,14 @@ class SelfTuningDetector:
 
     def update(self, time_s: float, state: np.ndarray, controls: np.ndarray,
                airspeed_mps: float = math.nan,
-               setpoint_rad: np.ndarray = NO_SETPOINT) -> DetectorSample | None:
+               setpoints: np.ndarray = NO_SETPOINTS) -> DetectorSample | None:
         """One sample (state and controls arrays, uav_common.channels order; the airspeed
         [m/s], which only an airspeed schedule uses: with one and none known yet, no
-        parameter test; the commanded roll and pitch [rad], which the tracking generators
-        take). None off the grid, for the first sample when a generator
+        parameter test; the autopilot's setpoints (generators.SETPOINTS), which the tracking
+        generators take). None off the grid, for the first sample when a generator
         needs the sample before, and for a sample with a non-finite value a generator takes
         (skipped: the RLS keeps its parameters, and the next sample has no sample before)."""
-        regression = self.feed.step(time_s, state, controls, setpoint_rad)
+        regression = self.feed.step(time_s, state, controls, setpoints)
         if regression is None:
             return None
         airspeed_offset_mps = self.airspeed_offset_mps(airspeed_mps)

@@ -13,11 +13,14 @@ setpoints, and the propulsion channel the along-track dynamics:
 
     roll_tracking   p[k] = a (phi_c[k] - phi[k]) + b           the roll loop's response
     pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b       the pitch loop's response
+    climb_tracking  h'[k] = a h'_c[k] + b                      the climb the autopilot gets
     propulsion      throttle[k] = a sin(gamma[k]) + b (1 / cos(phi[k])^2 - 1) + c
 
 p, q, r body rates [rad/s]; da aileron, de elevator [rad]; phi, theta roll and pitch and
-phi_c, theta_c their setpoints [rad]; throttle 0..1; gamma the flight-path angle from the
-ground velocity. The propulsion channel is the throttle the autopilot needs to hold its
+phi_c, theta_c their setpoints [rad]; h' the climb rate (the ground velocity's, up) and h'_c
+the autopilot's commanded one [m/s]; throttle 0..1; gamma the flight-path angle from the
+ground velocity. An engine that stops shows in climb_tracking: the aircraft sinks whatever
+climb its autopilot commands. The propulsion channel is the throttle the autopilot needs to hold its
 speed, against the climb it flies and the load factor of its turns (n^2 - 1, the induced
 drag's share): a loss of thrust raises the throttle needed (c, and the residual). Where the
 failure cuts the throttle output itself (ALFA's engine failures), it reads the injection.
@@ -43,13 +46,20 @@ _AILERON, _ELEVATOR, _THROTTLE = (CONTROL_CHANNELS.index(name)
 MIN_SPEED_MPS = 1.0  # below it the flight-path angle is not defined: the aircraft stands
 
 
+# The autopilot's setpoints a generator may read, in this order (NaN where unknown).
+SETPOINTS = ("roll_rad", "pitch_rad", "velocity_down_mps")
+_ROLL_SETPOINT, _PITCH_SETPOINT, _DOWN_SETPOINT = range(len(SETPOINTS))
+NO_SETPOINTS = np.full(len(SETPOINTS), math.nan)
+
+
 class GridSample(NamedTuple):
     """One sample on the detector's grid: state (14,) and controls (7,) in uav_common.channels
-    order, setpoint_rad (2,) commanded roll and pitch [rad] (NaN unknown)."""
+    order, setpoints (SETPOINTS order: commanded roll and pitch [rad], commanded vertical
+    velocity, down [m/s]; NaN unknown)."""
 
     state: np.ndarray
     controls: np.ndarray
-    setpoint_rad: np.ndarray
+    setpoints: np.ndarray
 
 
 # (phi, y) of a generator from this sample and the one before (None: not known)
@@ -81,11 +91,17 @@ def _yaw(now: GridSample, before: GridSample) -> Regression:
 
 
 def _roll_tracking(now: GridSample, before: GridSample | None) -> Regression:
-    return np.array([_angle_rad(now.setpoint_rad[0] - now.state[_ROLL]), 1.0]), now.state[_P]
+    error_rad = _angle_rad(now.setpoints[_ROLL_SETPOINT] - now.state[_ROLL])
+    return np.array([error_rad, 1.0]), now.state[_P]
 
 
 def _pitch_tracking(now: GridSample, before: GridSample | None) -> Regression:
-    return np.array([_angle_rad(now.setpoint_rad[1] - now.state[_PITCH]), 1.0]), now.state[_Q]
+    error_rad = _angle_rad(now.setpoints[_PITCH_SETPOINT] - now.state[_PITCH])
+    return np.array([error_rad, 1.0]), now.state[_Q]
+
+
+def _climb_tracking(now: GridSample, before: GridSample | None) -> Regression:
+    return np.array([-now.setpoints[_DOWN_SETPOINT], 1.0]), -now.state[_VD]
 
 
 def _propulsion(now: GridSample, before: GridSample | None) -> Regression:
@@ -106,6 +122,7 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("yaw", ("a_ra", "b_ra", "c_ra"), True, _yaw),
     Generator("roll_tracking", ("a_rt", "b_rt"), False, _roll_tracking),
     Generator("pitch_tracking", ("a_pt", "b_pt"), False, _pitch_tracking),
+    Generator("climb_tracking", ("a_ct", "b_ct"), False, _climb_tracking),
     Generator("propulsion", ("a_tg", "b_tn", "c_t"), False, _propulsion),
 )}
 # The paper's three: the simulated Aerosonde's shipped calibration.

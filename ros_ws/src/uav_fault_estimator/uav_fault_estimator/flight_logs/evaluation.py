@@ -104,7 +104,7 @@ def outcome_dict(outcome: FlightOutcome) -> dict[str, Any]:
 
 
 OUTCOME_HEADING = (f"{'flight':<58} {'failure':<9} {'outcome':<7} {'delay_s':>7} "
-                   f"{'channel':<10} {'before':>6} {'after_s':>7}")
+                   f"{'channel':<14} {'before':>6} {'after_s':>7}")
 
 
 def outcome_line(outcome: FlightOutcome) -> str:
@@ -112,7 +112,7 @@ def outcome_line(outcome: FlightOutcome) -> str:
     delay = "" if outcome.delay_s is None else f"{outcome.delay_s:.1f}"
     after = "" if outcome.flown_after_onset_s is None else f"{outcome.flown_after_onset_s:.1f}"
     return (f"{outcome.flight:<58} {outcome.failure or '-':<9} {outcome.outcome:<7} "
-            f"{delay:>7} {outcome.first_alarm_channel or '-':<10} "
+            f"{delay:>7} {outcome.first_alarm_channel or '-':<14} "
             f"{outcome.alarms_before_onset:>6} {after:>7}")
 
 
@@ -128,5 +128,5 @@ def summary_line(summary: dict[str, Any]) -> str:
             f"precision {percent(summary['precision'])}, recall {percent(summary['recall'])}, "
             f"accuracy {percent(summary['accuracy'])}; delay mean "
             f"{seconds(summary['mean_delay_s'])}, largest {seconds(summary['max_delay_s'])}; "
-            f"first alarm on the failed part's channel {summary['right_channel']} of "
+            f"first alarm on a channel of the failed part {summary['right_channel']} of "
             f"{summary['tp']}")

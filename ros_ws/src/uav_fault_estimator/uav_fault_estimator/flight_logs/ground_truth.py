@@ -20,10 +20,13 @@ from pathlib import Path
 
 from uav_fault_estimator.flight_logs.csv_logs import csv_files
 
-# The failures ALFA injects, and the detector channel that should see each first.
-EXPECTED_CHANNEL: Mapping[str, str] = {
-    "aileron": "roll", "elevator": "pitch", "rudder": "yaw", "engine": "propulsion"}
-FAILURE_KINDS = tuple(EXPECTED_CHANNEL)
+# The failures ALFA injects, and the detector channels (generators.GENERATORS) that read
+# what each failed part acts on: the surface's own axis (open loop, and its loop's tracking),
+# the engine's energy (the throttle it needs, the climb it can no longer hold).
+EXPECTED_CHANNELS: Mapping[str, tuple[str, ...]] = {
+    "aileron": ("roll", "roll_tracking"), "elevator": ("pitch", "pitch_tracking"),
+    "rudder": ("yaw",), "engine": ("propulsion", "climb_tracking")}
+FAILURE_KINDS = tuple(EXPECTED_CHANNELS)
 # ALFA's failure_status topics by the part they name (`engines` for the engine).
 _ALFA_PARTS = {"failure_status_engines": "engine", "failure_status_aileron": "aileron",
                "failure_status_elevator": "elevator", "failure_status_rudder": "rudder"}
@@ -45,7 +48,8 @@ class FlightTruth:
     @property
     def expected_channels(self) -> tuple[str, ...]:
         """The channels that see this failure (none without one)."""
-        return tuple(EXPECTED_CHANNEL[kind] for kind in (self.failure or "").split("+") if kind)
+        return tuple(channel for kind in (self.failure or "").split("+") if kind
+                     for channel in EXPECTED_CHANNELS[kind])
 
 
 NO_FAILURE = FlightTruth(None, None)
@@ -103,7 +107,7 @@ def _truth_row(path: Path, number: int, row: list[str],
         if onset:
             raise ValueError(f"{where}: an onset without a failure")
         return log, NO_FAILURE
-    unknown = [kind for kind in failure.split("+") if kind not in EXPECTED_CHANNEL]
+    unknown = [kind for kind in failure.split("+") if kind not in EXPECTED_CHANNELS]
     if unknown:
         raise ValueError(f"{where}: failure {unknown[0]!r} is not one of "
                          f"{', '.join(FAILURE_KINDS)} (join several with +)")

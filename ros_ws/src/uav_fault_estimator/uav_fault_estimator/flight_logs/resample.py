@@ -51,6 +51,7 @@ from uav_fault_estimator.flight_logs.streams import (
     PITCH_SETPOINT,
     ROLL_SETPOINT,
     SURFACES,
+    VELOCITY_SETPOINT,
     WIND,
     FlightLog,
     TimedSeries,
@@ -152,8 +153,8 @@ class DetectorInputs:
     minus the wind where the log has those and no airspeed), one line per thing to know
     (slow streams, absent streams, mixed outputs the log contradicts, an estimated
     airspeed), start_stamp_s the log's start in its own clock [s] (FlightLog.start_stamp_s)
-    and attitude_setpoint_rad (K, 2) the autopilot's commanded roll and pitch [rad] (NaN
-    where the log has none)."""
+    and setpoints (K, 3) the autopilot's (detection.generators.SETPOINTS: commanded roll,
+    pitch [rad], vertical velocity [m/s]; NaN where the log has none)."""
 
     times_s: np.ndarray
     state: np.ndarray
@@ -161,13 +162,13 @@ class DetectorInputs:
     airspeed_mps: np.ndarray
     warnings: tuple[str, ...]
     start_stamp_s: float = 0.0
-    attitude_setpoint_rad: np.ndarray | None = None
+    setpoints: np.ndarray | None = None
 
     @property
     def flight(self) -> DetectorFlight:
         """What self_tuning.run_detector and calibrate take."""
         return DetectorFlight(self.times_s, self.state, self.controls, self.airspeed_mps,
-                              self.attitude_setpoint_rad)
+                              self.setpoints)
 
 
 def _surfaces(log: FlightLog, airframe: Airframe | None) -> tuple[str, TimedSeries]:
@@ -218,8 +219,10 @@ def detector_samples(log: FlightLog, airframe: Airframe | None,
         velocity = log.streams[GROUND_VELOCITY]
         _fill(state, STATE_CHANNELS, velocity.columns, resample(velocity, times_s, LINEAR))
     setpoints = np.column_stack([
-        resample(log.streams[name], times_s, ANGULAR)[:, 0] if name in log.streams
-        else np.full(times_s.size, np.nan) for name in (ROLL_SETPOINT, PITCH_SETPOINT)])
+        resample(log.streams[name], times_s, method)[:, column] if name in log.streams
+        else np.full(times_s.size, np.nan) for name, method, column in (
+            (ROLL_SETPOINT, ANGULAR, 0), (PITCH_SETPOINT, ANGULAR, 0),
+            (VELOCITY_SETPOINT, LINEAR, 2))])  # generators.SETPOINTS order
     warnings = _warnings(log, airframe, surfaces_name, surfaces, period_s)
     if AIRSPEED in log.streams:
         airspeed_mps = resample(log.streams[AIRSPEED], times_s, LINEAR)[:, 0]

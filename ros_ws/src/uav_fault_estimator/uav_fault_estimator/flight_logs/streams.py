@@ -22,8 +22,10 @@ OUTPUTS = "outputs"  # output_1 ... output_n, raw
 SURFACES = "surfaces"
 GROUND_VELOCITY = "ground_velocity"  # velocity_north, velocity_east, velocity_down [m/s]
 WIND = "wind"  # wind_north, wind_east [m/s]: the autopilot's estimate, towards which it blows
-# The autopilot's commanded attitude (its attitude controller's setpoints) [rad], NED
+# The autopilot's commanded attitude (its attitude controller's setpoints) [rad], NED, and
+# ground velocity [m/s], NED
 ROLL_SETPOINT, PITCH_SETPOINT = "roll_setpoint", "pitch_setpoint"
+VELOCITY_SETPOINT = "velocity_setpoint"
 STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
     BODY_RATES: ("roll_rate", "pitch_rate", "yaw_rate"),
     ATTITUDE: ("roll", "pitch", "yaw"),
@@ -33,6 +35,8 @@ STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
     WIND: ("wind_north", "wind_east"),
     ROLL_SETPOINT: ("roll_setpoint",),
     PITCH_SETPOINT: ("pitch_setpoint",),
+    VELOCITY_SETPOINT: ("velocity_north_setpoint", "velocity_east_setpoint",
+                        "velocity_down_setpoint"),
 }
 OUTPUT_UNITS = ("pwm_us", "normalised")
 # What a log's airspeed is: true (TAS), calibrated (CAS) or indicated (IAS); the readers say

@@ -38,6 +38,7 @@ from uav_fault_estimator.flight_logs.streams import (
     ROLL_SETPOINT,
     STREAM_COLUMNS,
     SURFACES,
+    VELOCITY_SETPOINT,
     WIND,
     TimedSeries,
     ordered_series,
@@ -149,6 +150,16 @@ def _setpoint(stream: str) -> Callable[[np.ndarray, Fields, str], Streams]:
     return streams
 
 
+_VELOCITY_COMMAND_FIELDS = ("des_x", "des_y", "des_z")
+
+
+def _velocity_setpoint(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
+    """ALFA's /mavros/nav_info/velocity (des_x/y/z commanded, meas_x/y/z measured; PX4's own
+    NED whatever the log's axes: meas_x/y/z match local_position's north, east, down): the
+    commanded ground velocity [m/s]."""
+    return _streams(times_s, **{VELOCITY_SETPOINT: _columns(fields, _VELOCITY_COMMAND_FIELDS)})
+
+
 STATE_FIELDS = dict(zip(STATE_CHANNELS, map(field_name, STATE_CHANNELS, STATE_UNITS),
                         strict=True))
 CONTROL_FIELDS = dict(zip(CONTROL_CHANNELS, map(field_name, CONTROL_CHANNELS, CONTROL_UNITS),
@@ -179,6 +190,7 @@ def _air_data(times_s: np.ndarray, fields: Fields, axes: str) -> Streams:
 IMU, RC_OUT, VFR_HUD = "imu", "rc_out", "vfr_hud"
 VELOCITY, WIND_ESTIMATE, EULER = "velocity", "wind_estimate", "euler"
 ROLL_COMMAND, PITCH_COMMAND = "roll_command", "pitch_command"
+VELOCITY_COMMAND = "velocity_command"
 STATE, CONTROLS, AIR_DATA = "state", "controls", "air_data"
 _COMMAND_FIELDS = ("commanded", "measured")
 MEANINGS: Mapping[str, TopicMeaning] = {
@@ -201,6 +213,8 @@ MEANINGS: Mapping[str, TopicMeaning] = {
                                _setpoint(ROLL_SETPOINT), (ROLL_SETPOINT,)),
     PITCH_COMMAND: TopicMeaning("mavros_msgs/msg/NavInfo", _COMMAND_FIELDS, (), "FRD", "",
                                 _setpoint(PITCH_SETPOINT), (PITCH_SETPOINT,)),
+    VELOCITY_COMMAND: TopicMeaning("mavros_msgs/msg/NavInfoVelocity", _VELOCITY_COMMAND_FIELDS,
+                                   (), "FRD", "", _velocity_setpoint, (VELOCITY_SETPOINT,)),
     STATE: TopicMeaning("uav_fault_msgs/msg/AircraftState",
                         tuple(STATE_FIELDS[name] for name in _RATES + _EULER), (), "FRD", "",
                         _state, (BODY_RATES, ATTITUDE)),
@@ -217,7 +231,8 @@ MAVROS_TOPICS: Mapping[str, str] = {
     "/mavros/imu/data": IMU, "/mavros/imu/data_raw": IMU, "/mavros/rc/out": RC_OUT,
     "/mavros/vfr_hud": VFR_HUD, "/mavros/local_position/velocity": VELOCITY,
     "/mavros/wind_estimation": WIND_ESTIMATE, "/mavctrl/rpy": EULER,
-    "/mavros/nav_info/roll": ROLL_COMMAND, "/mavros/nav_info/pitch": PITCH_COMMAND}
+    "/mavros/nav_info/roll": ROLL_COMMAND, "/mavros/nav_info/pitch": PITCH_COMMAND,
+    "/mavros/nav_info/velocity": VELOCITY_COMMAND}
 PROJECT_TOPICS: Mapping[str, str] = {"/state": STATE, "/controls": CONTROLS, "/air_data": AIR_DATA}
 DEFAULT_TOPICS: Mapping[str, str] = {**MAVROS_TOPICS, **PROJECT_TOPICS}
 
