@@ -130,6 +130,28 @@ def test_screen_writes_tables_figures_summaries(logs: Path, calibration: Path) -
           f"{fault['first_combined_alarm_s'] - fault_start_s:.1f} s after the fault")
     assert "aileron_loss: " in result.stdout and "start_s" in result.stdout
 
+    # The same logs against a truth table (onsets in the log's clock: its start stamp on)
+    truth = logs / "truth.csv"
+    truth.write_text("log,failure,onset_stamp_s\n"
+                     f"aileron_loss,aileron,{fault['start_stamp_s'] + fault_start_s!r}\n"
+                     + "".join(f"{name},,\n" for name in names[1:]))
+    judged = screen_logs("screen", logs / "aileron_loss.ulg", logs / "fault_free",
+                         logs / "held_out", "--calibration", calibration, "--airframe",
+                         simulated_logs.FIXTURE_AIRFRAME, "--out", logs / "judged",
+                         "--truth", truth)
+    assert judged.returncode == 0, judged.stderr
+    evaluated = json.loads((logs / "judged" / "summary.json").read_text())
+    outcomes = {log["log"]: log["outcome"] for log in evaluated["logs"]}
+    assert outcomes["aileron_loss"]["outcome"] == "tp"
+    assert outcomes["aileron_loss"]["delay_s"] == pytest.approx(
+        fault["first_combined_alarm_s"] - fault_start_s, abs=1e-6)
+    for log in summary["logs"][1:]:  # without failure: fp exactly when an alarm was raised
+        assert outcomes[log["log"]]["outcome"] == (
+            "tn" if log["first_combined_alarm_s"] is None else "fp")
+    tp = evaluated["evaluation"]["tp"]
+    assert (tp, evaluated["evaluation"]["recall"]) == (1, 1.0)
+    assert "precision" in judged.stdout.splitlines()[-2]
+
 
 @pytest.mark.timeout(60)
 def test_a_calibration_of_another_airframe_is_refused(logs: Path, calibration: Path) -> None:
@@ -150,3 +172,10 @@ def test_a_file_that_is_not_a_log_is_refused(logs: Path, calibration: Path) -> N
     result = screen_logs("calibrate", notes, "--airframe", simulated_logs.FIXTURE_AIRFRAME,
                          "--out", logs / "refused.yaml")
     assert_refused(result, str(notes), "not a flight log")
+
+
+@pytest.mark.timeout(60)
+def test_the_alfa_benchmark_refuses_a_folder_without_alfa_flights(logs: Path) -> None:
+    result = subprocess.run([sys.executable, str(SCRIPT.parent / "alfa_benchmark.py"),
+                             logs / "fault_free"], capture_output=True, text=True, timeout=60)
+    assert_refused(result, "no ALFA flight folder")
