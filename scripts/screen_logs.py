@@ -184,7 +184,7 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
               + "# Valid for the sample period, forgetting factor and window below only.\n")
     try:
         write_calibration(arguments.out, header, calibration_to_dict(calibration),
-                          f"{len(logs)} logs", time.monotonic() - started)
+                          f"{len(flights)} logs", time.monotonic() - started)
     except OSError as error:
         raise BadInputError(f"cannot write {arguments.out}: {error.strerror}") from None
 
