@@ -1,7 +1,8 @@
-"""log_replay_node as a process: a simulated aileron-fault flight written as a PX4 ULog and as
-a ROS 1 MAVROS bag (PWM outputs at 2.9 Hz, rates at 10 Hz, jittered; FLU in the bag),
-replayed as fast as detector_node keeps up, gives the alarms the core's offline run of the
-same log gives; a bad log or airframe is one line and status 2."""
+"""log_replay_node as a process: a simulated aileron-fault flight written as a PX4 ULog, and as
+a ROS 1 MAVROS bag (PWM outputs at 2.9 Hz, rates at 10 Hz, jittered; FLU in the bag)
+exported as an ALFA flight folder with the autopilot's setpoints, replayed as fast as
+detector_node keeps up, gives the alarms the core's offline run of the same log gives; a
+bad log or airframe is one line and status 2."""
 
 from __future__ import annotations
 
@@ -11,17 +12,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from helpers import simulated_logs
-from helpers.simulated_logs import FIXTURE_AIRFRAME
-from uav_common.message_fields import air_data_array, stamp_seconds
+from helpers.simulated_logs import ALFA, FIXTURE_AIRFRAME
+from uav_common.message_fields import air_data_array, setpoints_array, stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
-from uav_fault_estimator.detection.calibration_file import load_calibration
-from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
+from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
-from uav_fault_msgs.msg import AircraftState, AirData, FaultAlarm
+from uav_fault_estimator.flight_logs.streams import ATTITUDE
+from uav_fault_msgs.msg import AircraftState, AirData, AutopilotSetpoints, FaultAlarm
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 
@@ -30,6 +34,8 @@ pytestmark = pytest.mark.integration
 DURATION_S = 60.0  # the detector settles after 30 s
 FAULT_START_S = 40.0  # the aileron loss, moved from 150 s into the flight
 SEED = 17
+ALFA_FLIGHT = "carbonZ_2018-01-01-00-00-00_aileron_fault"  # ALFA's folder naming
+TRACKING_SET = ("roll", "pitch", "yaw", "roll_tracking", "pitch_tracking")
 
 
 @pytest.fixture(scope="module")
@@ -45,8 +51,31 @@ def aileron_fault_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tu
     folder = tmp_path_factory.mktemp("replay")
     simulated_logs.write_ulog(folder / "aileron_fault.ulg", truth)
     bag_start_s = simulated_logs.write_mavros_bag(folder / "aileron_fault.bag", truth, SEED)
+    alfa = folder / ALFA_FLIGHT
+    simulated_logs.export_csv(folder / "aileron_fault.bag", alfa, ALFA)
+    write_nav_info(alfa)
     return {"ulg": (folder / "aileron_fault.ulg", 0.0),
-            "bag": (folder / "aileron_fault.bag", bag_start_s)}
+            "bag": (folder / "aileron_fault.bag", bag_start_s),
+            "alfa": (alfa, bag_start_s)}
+
+
+def write_nav_info(folder: Path) -> None:
+    """ALFA's nav_info/roll and /pitch for an ALFA flight folder: the measured angle the
+    log's attitude [deg], the commanded one that plus a slow swing (an autopilot's setpoint
+    leads its aircraft), at the attitude's instants in the log's clock."""
+    log = read_log(folder)
+    attitude = log.streams[ATTITUDE]
+    stamps_ns = np.round((log.start_stamp_s + attitude.times_s) * 1e9).astype(np.int64)
+    swing_deg = 3.0 * np.sin(attitude.times_s / 2.0)
+    for axis, column in (("roll", 0), ("pitch", 1)):
+        measured_deg = np.degrees(attitude.values[:, column])
+        with (folder / f"{folder.name}-mavros-nav_info-{axis}.csv").open("w") as file:
+            file.write("%time,field.header.seq,field.header.stamp,field.header.frame_id,"
+                       "field.commanded,field.measured\n")
+            file.writelines(f"{stamp},{k},{stamp},NED,{float(measured + swing)!r},"
+                            f"{float(measured)!r}\n"
+                            for k, (stamp, measured, swing) in enumerate(
+                                zip(stamps_ns, measured_deg, swing_deg, strict=True)))
 
 
 @pytest.fixture
@@ -63,7 +92,7 @@ def replay_argv(log: Path, airframe: Path | None, *extra: str) -> list[str]:
 
 @pytest.mark.slow
 @pytest.mark.timeout(60)
-@pytest.mark.parametrize("suffix", ["ulg", "bag"])
+@pytest.mark.parametrize("suffix", ["ulg"])
 def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
         suffix, aileron_fault_logs, graph, start_process):
     log, start_s = aileron_fault_logs[suffix]
@@ -109,6 +138,50 @@ def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
           f"{stamp_seconds(combined[0].header.stamp) if combined else float('nan'):.1f} s "
           f"(fault at {FAULT_START_S - start_s:g} s of log time)")
     assert combined and stamp_seconds(combined[0].header.stamp) >= FAULT_START_S - start_s
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(60)
+def test_the_tracking_generators_run_through_the_graph_on_the_logs_setpoints(
+        aileron_fault_logs, graph, start_process, tmp_path):
+    """An ALFA flight folder (the bag's topics, with nav_info setpoints): log_replay_node
+    publishes the setpoints, detector_node with a calibration of the paper's generators and
+    the roll and pitch tracking ones (made from the log's part before the fault) gives the
+    core's numbers on every sample."""
+    log, _ = aileron_fault_logs["alfa"]
+    inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
+    before_fault = inputs.times_s < inputs.times_s[0] + 35.0
+    calibration = calibrate([DetectorFlight(*(np.asarray(column)[before_fault]
+                                             for column in inputs.flight))],
+                            0.2, 0.995, 25, 10.0, generators=TRACKING_SET)
+    calibration_file = tmp_path / "calibration.yaml"
+    calibration_file.write_text(yaml.safe_dump(calibration_to_dict(calibration),
+                                               sort_keys=False))
+    topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/autopilot_setpoints":
+                              AutopilotSetpoints, "/state": AircraftState}, STREAM_QOS)
+    alarms, setpoints = topics["/faults/alarm"], topics["/autopilot_setpoints"]
+    start_process(ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=[
+        "-p", f"calibration_file:={calibration_file}"]), "detector_node")
+    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
+    replay = start_process(replay_argv(log, FIXTURE_AIRFRAME, "-p", "real_time_factor:=0",
+                                       "-p", "wait_for_subscribers:=2"), "log_replay_node")
+    assert replay.wait(timeout_s=40) == 0, replay.output()
+
+    offline = run_detector(calibration, inputs.flight, 0.01)
+    graph.spin(20.0, until=lambda: len(alarms) >= len(offline)
+               and len(setpoints) >= inputs.times_s.size)
+    np.testing.assert_allclose(np.array([setpoints_array(m) for m in setpoints]),
+                               inputs.setpoints, rtol=1e-12, equal_nan=True)
+    assert np.isfinite(inputs.setpoints[:, :2]).any(axis=1).sum() > 0.9 * inputs.times_s.size
+    assert {tuple(m.channel_names) for m in alarms} == {TRACKING_SET}
+    assert [stamp_seconds(m.header.stamp) for m in alarms] == pytest.approx(
+        [s.time_s for s in offline], abs=1e-9)
+    np.testing.assert_allclose([m.statistic for m in alarms],
+                               [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose([m.parameter_deviation for m in alarms],
+                               [s.parameter_deviation for s in offline], rtol=1e-9,
+                               equal_nan=True)
+    assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
 
 
 @pytest.mark.slow

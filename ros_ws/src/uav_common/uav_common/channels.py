@@ -45,6 +45,10 @@ AIR_DATA_FIELDS: tuple[str, ...] = ("true_airspeed_mps", "angle_of_attack_rad", 
 # Channels a scenario's sensor_dropouts may name.
 DROPOUT_CHANNELS: tuple[str, ...] = STATE_CHANNELS + AIR_DATA_CHANNELS
 
+# The autopilot's setpoints (message AutopilotSetpoints, whose fields these are): commanded
+# roll and pitch [rad], commanded vertical velocity, down [m/s].
+SETPOINT_FIELDS: tuple[str, ...] = ("roll_rad", "pitch_rad", "velocity_down_mps")
+
 CONTROL_CHANNELS: tuple[str, ...] = (
     "flap",
     "elevator",

@@ -17,6 +17,7 @@ from uav_common.channels import (
     AIR_DATA_FIELDS,
     CONTROL_CHANNELS,
     CONTROL_UNITS,
+    SETPOINT_FIELDS,
     STATE_CHANNELS,
     STATE_UNITS,
     field_name,
@@ -61,6 +62,11 @@ def controls_array(message: Any) -> np.ndarray:
 def air_data_array(message: Any) -> np.ndarray:
     """(3,) array in AIR_DATA_CHANNELS order from an AirData message."""
     return _values(message, AIR_DATA_FIELDS)
+
+
+def setpoints_array(message: Any) -> np.ndarray:
+    """(3,) array in SETPOINT_FIELDS order from an AutopilotSetpoints message."""
+    return _values(message, SETPOINT_FIELDS)
 
 
 def wind_array(message: Any) -> np.ndarray:

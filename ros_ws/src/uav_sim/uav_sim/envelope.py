@@ -13,7 +13,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.channels import (
+    AIR_DATA_CHANNELS,
+    CONTROL_CHANNELS,
+    SETPOINT_FIELDS,
+    STATE_CHANNELS,
+)
 
 # (low, high) per channel, in uav_common.channels order and units.
 STATE_BOUNDS: dict[str, tuple[float, float]] = {
@@ -73,6 +78,10 @@ def _limits(bounds: dict[str, tuple[float, float]],
 
 
 STATE_LIMITS = _limits(STATE_BOUNDS, STATE_CHANNELS)
+# The autopilot's setpoints (SETPOINT_FIELDS) within the state's own bounds
+SETPOINT_LIMITS = _limits({"roll_rad": STATE_BOUNDS["roll"], "pitch_rad": STATE_BOUNDS["pitch"],
+                           "velocity_down_mps": STATE_BOUNDS["velocity_down"]},
+                          SETPOINT_FIELDS)
 CONTROL_LIMITS = _limits(CONTROL_BOUNDS, CONTROL_CHANNELS)
 AIR_DATA_LIMITS = _limits(AIR_DATA_BOUNDS, AIR_DATA_CHANNELS)
 WIND_LIMITS = (np.full(3, -WIND_BOUND_MPS), np.full(3, WIND_BOUND_MPS))

@@ -8,9 +8,16 @@ from collections.abc import Sequence
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3, Vector3Stamped
 from std_msgs.msg import Header
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
+from uav_fault_msgs.msg import (
+    AircraftState,
+    AirData,
+    AutopilotSetpoints,
+    ControlInputs,
+    FaultVector,
+    WindEstimate,
+)
 
-from uav_common.channels import AIR_DATA_FIELDS
+from uav_common.channels import AIR_DATA_FIELDS, SETPOINT_FIELDS
 from uav_common.message_fields import CONTROL_FIELDS, STATE_FIELDS
 from uav_common.sample_grid import NANOSECONDS_PER_SECOND
 
@@ -53,6 +60,12 @@ def controls_message(time_s: float, controls: Sequence[float]) -> ControlInputs:
 def air_data_message(time_s: float, air_data: Sequence[float]) -> AirData:
     """AirData from a (3,) array in AIR_DATA_CHANNELS order (NaN: channel missing)."""
     return _filled(AirData(header=header(time_s, BODY_FRAME)), AIR_DATA_FIELDS, air_data)
+
+
+def setpoints_message(time_s: float, setpoints: Sequence[float]) -> AutopilotSetpoints:
+    """AutopilotSetpoints from a (3,) array in SETPOINT_FIELDS order (NaN: not known)."""
+    return _filled(AutopilotSetpoints(header=header(time_s, NED_FRAME)), SETPOINT_FIELDS,
+                   setpoints)
 
 
 def wind_message(time_s: float, wind_ned_mps: Sequence[float], tau_s: float) -> WindEstimate:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.channels import CONTROL_CHANNELS, SETPOINT_FIELDS, STATE_CHANNELS
 
 _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
 _ROLL, _PITCH = STATE_CHANNELS.index("roll"), STATE_CHANNELS.index("pitch")
@@ -46,8 +46,9 @@ _AILERON, _ELEVATOR, _THROTTLE = (CONTROL_CHANNELS.index(name)
 MIN_SPEED_MPS = 1.0  # below it the flight-path angle is not defined: the aircraft stands
 
 
-# The autopilot's setpoints a generator may read, in this order (NaN where unknown).
-SETPOINTS = ("roll_rad", "pitch_rad", "velocity_down_mps")
+# The autopilot's setpoints a generator may read, in this order (NaN where unknown): the
+# fields of AutopilotSetpoints.
+SETPOINTS = SETPOINT_FIELDS
 _ROLL_SETPOINT, _PITCH_SETPOINT, _DOWN_SETPOINT = range(len(SETPOINTS))
 NO_SETPOINTS = np.full(len(SETPOINTS), math.nan)
 

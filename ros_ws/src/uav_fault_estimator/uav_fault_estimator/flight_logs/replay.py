@@ -25,13 +25,20 @@ from uav_fault_estimator.flight_logs.streams import AIRSPEED
 @dataclass(frozen=True)
 class LogReplay:
     """A log on the grid: source (the path read), inputs (times_s (K,) [s], state (K, 14),
-    controls (K, 7), warnings: resample.DetectorInputs) and air_data (K, 3) in
+    controls (K, 7), setpoints, warnings: resample.DetectorInputs) and air_data (K, 3) in
     AIR_DATA_CHANNELS order (the log's airspeed [m/s], angle of attack and sideslip NaN:
     no log carries them), None for a log without airspeed."""
 
     source: str
     inputs: DetectorInputs
     air_data: np.ndarray | None
+
+    @property
+    def setpoints(self) -> np.ndarray | None:
+        """(K, 3) the autopilot's setpoints (SETPOINT_FIELDS order), None for a log without
+        any."""
+        setpoints = self.inputs.setpoints
+        return None if setpoints is None or np.isnan(setpoints).all() else setpoints
 
 
 def air_data_rows(airspeed_mps: np.ndarray) -> np.ndarray:

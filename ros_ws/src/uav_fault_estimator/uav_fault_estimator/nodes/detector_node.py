@@ -1,10 +1,11 @@
-"""detector_node: fast control-surface fault alarms from self-tuning residual generators.
+"""detector_node: fast fault alarms from self-tuning residual generators.
 
-Subscribes `state` and `controls` (matched by stamp) and `air_data` where it comes (its
-airspeed, for a calibration scheduled on airspeed); on the calibration's sample grid
-(every 0.2 s of sim time) runs the three RLS residual generators, their GLRT and the
-parameter-deviation test (self_tuning.py; Blanke & Hansen) and publishes `faults/alarm`
-(FaultAlarm, stamped like the sample), and `/diagnostics`.
+Subscribes `state` and `controls` (matched by stamp), and where they come `air_data` (its
+airspeed, for a calibration scheduled on airspeed) and `autopilot_setpoints` (for the
+tracking generators); on the calibration's sample grid (every 0.2 s of sim time) runs the
+calibration's RLS residual generators, their GLRT and the parameter-deviation test
+(detection/; Blanke & Hansen) and publishes `faults/alarm` (FaultAlarm, stamped like the
+sample), and `/diagnostics`.
 """
 
 from __future__ import annotations
@@ -14,7 +15,12 @@ import sys
 from typing import Any
 
 from rclpy.node import Node
-from uav_common.message_fields import air_data_array, controls_array, state_array
+from uav_common.message_fields import (
+    air_data_array,
+    controls_array,
+    setpoints_array,
+    state_array,
+)
 from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_tools import (
     ERROR,
@@ -26,11 +32,24 @@ from uav_common.ros.node_tools import (
     declare_parameters,
     run_node,
 )
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultAlarm
-from uav_sim.envelope import AIR_DATA_LIMITS, CONTROL_LIMITS, STATE_LIMITS, state_rate_gate
+from uav_fault_msgs.msg import (
+    AircraftState,
+    AirData,
+    AutopilotSetpoints,
+    ControlInputs,
+    FaultAlarm,
+)
+from uav_sim.envelope import (
+    AIR_DATA_LIMITS,
+    CONTROL_LIMITS,
+    SETPOINT_LIMITS,
+    STATE_LIMITS,
+    state_rate_gate,
+)
 
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import DetectorSample, SelfTuningDetector
+from uav_fault_estimator.detection.generators import NO_SETPOINTS
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
@@ -48,7 +67,9 @@ PARAMETERS = {
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
            "state": (AircraftState, state_array, STATE_LIMITS, state_rate_gate)}
-OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS, None)}
+OPTIONAL_STREAMS = {"air_data": (AirData, air_data_array, AIR_DATA_LIMITS, None),
+                    "autopilot_setpoints": (AutopilotSetpoints, setpoints_array,
+                                            SETPOINT_LIMITS, None)}
 _AIRSPEED = 0  # air_data_array's index of the true airspeed
 
 
@@ -78,7 +99,8 @@ class DetectorNode(Node):
         skipped = self.detector.skipped_samples
         air_data = payloads.get("air_data")
         sample = self.detector.update(time_s, payloads["state"], payloads["controls"],
-                                      math.nan if air_data is None else air_data[_AIRSPEED])
+                                      math.nan if air_data is None else air_data[_AIRSPEED],
+                                      payloads.get("autopilot_setpoints", NO_SETPOINTS))
         if sample is None:  # off the grid, or skipped
             if self.detector.skipped_samples > skipped:
                 self.diagnostics.update(WARN, "sample skipped (first, or a value a generator "

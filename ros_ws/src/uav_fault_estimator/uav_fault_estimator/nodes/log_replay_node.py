@@ -22,7 +22,13 @@ from typing import Any
 import rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from uav_common.ros.messages import air_data_message, controls_message, stamp, state_message
+from uav_common.ros.messages import (
+    air_data_message,
+    controls_message,
+    setpoints_message,
+    stamp,
+    state_message,
+)
 from uav_common.ros.node_tools import (
     CLOCK_QOS,
     OK,
@@ -34,7 +40,7 @@ from uav_common.ros.node_tools import (
     run_node,
 )
 from uav_common.ros.paced_publishing import PacedPublishers
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs
+from uav_fault_msgs.msg import AircraftState, AirData, AutopilotSetpoints, ControlInputs
 
 from uav_fault_estimator.flight_logs.replay import load_replay
 
@@ -75,6 +81,9 @@ class LogReplayNode(Node):
                       self.create_publisher(ControlInputs, "controls", STREAM_QOS)]
         if self.replay.air_data is not None:
             publishers.append(self.create_publisher(AirData, "air_data", STREAM_QOS))
+        if self.replay.setpoints is not None:
+            publishers.append(self.create_publisher(AutopilotSetpoints, "autopilot_setpoints",
+                                                    STREAM_QOS))
         self.paced = PacedPublishers(self, publishers)
         self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
         self.diagnostics = Diagnostics(self, stale_after_s=None)  # a source: no inputs
@@ -92,6 +101,8 @@ class LogReplayNode(Node):
                     controls_message(time_s, inputs.controls[row])]
         if self.replay.air_data is not None:
             messages.append(air_data_message(time_s, self.replay.air_data[row]))
+        if self.replay.setpoints is not None:
+            messages.append(setpoints_message(time_s, self.replay.setpoints[row]))
         for publisher, message in zip(self.paced.publishers, messages, strict=True):
             publisher.publish(message)
         self.clock_publisher.publish(Clock(clock=stamp(time_s)))
