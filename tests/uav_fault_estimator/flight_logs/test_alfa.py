@@ -175,5 +175,11 @@ def test_the_tracking_and_propulsion_generators_regress_as_documented() -> None:
                                [1.0 / math.hypot(20.0, 1.0), 1.0 / math.cos(0.1) ** 2 - 1.0, 1.0])
     assert found["propulsion"][1] == 0.6
     assert regressions(("yaw",), now, None) is None  # r[k-1] needed
+    controls[[2, 3]] = [0.05, -0.02]  # aileron, rudder [rad]
+    before = GridSample(state.copy(), controls, now.setpoints)
+    before.state[11] = 0.3  # r[k-1] [rad/s]
+    lateral = regressions(("roll_rudder", "yaw_rudder"), now, before)
+    np.testing.assert_allclose(lateral["roll_rudder"][0], [0.05, -0.02, 1.0])
+    np.testing.assert_allclose(lateral["yaw_rudder"][0], [0.05, 0.3, -0.02, 1.0])
     unknown = GridSample(state, controls, np.full(3, math.nan))
     assert regressions(("roll_tracking",), unknown, now) is None

@@ -2,28 +2,33 @@
 each a model linear in its parameters, y[k] = phi[k]ᵀ theta, identified in flight by RLS
 (rls.py). A calibration names the generators it was made for; the detector runs those.
 
-    roll     p[k] = a_pa da[k] + b_pa                          (eq. 2)
-    pitch    q[k] = a_qe de[k] + b_qe                          (eq. 3)
-    yaw      r[k] = a_ra da[k] + b_ra r[k-1] + c_ra            (eq. 4)
+The paper's three, and the lateral pair with a rudder the autopilot commands on its own
+(not a copy of the aileron) as the other lateral input:
 
-The paper's three read the surface commands: on a real aircraft whose failure shows in its
-outputs (a servo pinned by the failure), a generator fed that output sees an aircraft
-consistent with it. The closed-loop pair reads the autopilot's intent instead, its attitude
-setpoints, and the propulsion channel the along-track dynamics:
+    roll         p[k] = a_pa da[k] + b_pa                           (eq. 2)
+    pitch        q[k] = a_qe de[k] + b_qe                           (eq. 3)
+    yaw          r[k] = a_ra da[k] + b_ra r[k-1] + c_ra             (eq. 4)
+    roll_rudder  p[k] = a_pa da[k] + a_pr dr[k] + b_pa
+    yaw_rudder   r[k] = a_ra da[k] + b_ra r[k-1] + a_rr dr[k] + c_ra
 
-    roll_tracking   p[k] = a (phi_c[k] - phi[k]) + b           the roll loop's response
-    pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b       the pitch loop's response
-    climb_tracking  h'[k] = a h'_c[k] + b                      the climb the autopilot gets
+These read the surface commands: on a real aircraft whose failure shows in its outputs (a
+servo pinned by the failure), a generator fed that output sees an aircraft consistent with
+it. The tracking generators read the autopilot's intent instead, its setpoints, against the
+aircraft's response; the propulsion channel the throttle it needs:
+
+    roll_tracking   p[k] = a (phi_c[k] - phi[k]) + b            the roll loop's response
+    pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b        the pitch loop's response
+    climb_tracking  h'[k] = a h'_c[k] + b                       the climb the autopilot gets
     propulsion      throttle[k] = a sin(gamma[k]) + b (1 / cos(phi[k])^2 - 1) + c
 
-p, q, r body rates [rad/s]; da aileron, de elevator [rad]; phi, theta roll and pitch and
-phi_c, theta_c their setpoints [rad]; h' the climb rate (the ground velocity's, up) and h'_c
-the autopilot's commanded one [m/s]; throttle 0..1; gamma the flight-path angle from the
-ground velocity. An engine that stops shows in climb_tracking: the aircraft sinks whatever
-climb its autopilot commands. The propulsion channel is the throttle the autopilot needs to hold its
-speed, against the climb it flies and the load factor of its turns (n^2 - 1, the induced
-drag's share): a loss of thrust raises the throttle needed (c, and the residual). Where the
-failure cuts the throttle output itself (ALFA's engine failures), it reads the injection.
+p, q, r body rates [rad/s]; da aileron, de elevator, dr rudder [rad]; phi, theta roll and
+pitch and phi_c, theta_c their setpoints [rad]; h' the climb rate (the ground velocity's,
+up) and h'_c the autopilot's commanded one [m/s]; throttle 0..1; gamma the flight-path angle
+from the ground velocity. An engine that stops shows in climb_tracking: the aircraft sinks
+whatever climb its autopilot commands. The propulsion channel is the throttle the autopilot
+needs to hold its speed against the climb it flies and its turns' load factor (n^2 - 1, the
+induced drag's share): a loss of thrust raises it (c, and the residual). Where a failure
+cuts the throttle output itself (ALFA's engine failures), it reads the injection.
 No ROS here.
 """
 
@@ -41,8 +46,9 @@ _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate",
 _ROLL, _PITCH = STATE_CHANNELS.index("roll"), STATE_CHANNELS.index("pitch")
 _VN, _VE, _VD = (STATE_CHANNELS.index(name)
                   for name in ("velocity_north", "velocity_east", "velocity_down"))
-_AILERON, _ELEVATOR, _THROTTLE = (CONTROL_CHANNELS.index(name)
-                                  for name in ("aileron", "elevator", "throttle"))
+_AILERON, _ELEVATOR, _RUDDER, _THROTTLE = (CONTROL_CHANNELS.index(name)
+                                           for name in ("aileron", "elevator", "rudder",
+                                                        "throttle"))
 MIN_SPEED_MPS = 1.0  # below it the flight-path angle is not defined: the aircraft stands
 
 
@@ -91,6 +97,17 @@ def _yaw(now: GridSample, before: GridSample) -> Regression:
     return np.array([now.controls[_AILERON], before.state[_R], 1.0]), now.state[_R]  # eq. 4, 7
 
 
+def _roll_rudder(now: GridSample, before: GridSample | None) -> Regression:
+    controls = now.controls
+    return np.array([controls[_AILERON], controls[_RUDDER], 1.0]), now.state[_P]
+
+
+def _yaw_rudder(now: GridSample, before: GridSample) -> Regression:
+    controls = now.controls
+    return (np.array([controls[_AILERON], before.state[_R], controls[_RUDDER], 1.0]),
+            now.state[_R])
+
+
 def _roll_tracking(now: GridSample, before: GridSample | None) -> Regression:
     error_rad = _angle_rad(now.setpoints[_ROLL_SETPOINT] - now.state[_ROLL])
     return np.array([error_rad, 1.0]), now.state[_P]
@@ -121,6 +138,8 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("roll", ("a_pa", "b_pa"), False, _roll),
     Generator("pitch", ("a_qe", "b_qe"), False, _pitch),
     Generator("yaw", ("a_ra", "b_ra", "c_ra"), True, _yaw),
+    Generator("roll_rudder", ("a_pa", "a_pr", "b_pa"), False, _roll_rudder),
+    Generator("yaw_rudder", ("a_ra", "b_ra", "a_rr", "c_ra"), True, _yaw_rudder),
     Generator("roll_tracking", ("a_rt", "b_rt"), False, _roll_tracking),
     Generator("pitch_tracking", ("a_pt", "b_pt"), False, _pitch_tracking),
     Generator("climb_tracking", ("a_ct", "b_ct"), False, _climb_tracking),
