@@ -33,8 +33,9 @@ airspeeds span enough (calibration.MIN_SCHEDULE_SPAN_MPS), else a line saying wh
 schedule; airspeed: a schedule or refuse; none: no schedule.
 
 screen: per log into DIR: NAME.alarms.csv (the alarm intervals: start_s, end_s, channel,
-test, samples; also printed), NAME.png (the figure), NAME.json (flight_logs.screening's
-summary, with the log's start stamp and, with a truth, its outcome), and DIR/summary.json
+test, samples, also printed, and their ends in the log's clock, start_stamp_s and
+end_stamp_s), NAME.png (the figure), NAME.json (flight_logs.screening's summary, with the
+log's start stamp and, with a truth, its outcome), and DIR/summary.json
 (the calibration, the settings, every log's summary and, with truths, the evaluation).
 NAME is the log's file or folder name without its suffix.
 
@@ -228,7 +229,7 @@ def screen_logs(arguments: argparse.Namespace) -> None:
             outcomes.append(outcome)
             if truth.onset_stamp_s is not None:
                 onset_s = truth.onset_stamp_s - inputs.start_stamp_s
-        write_alarm_csv(out / f"{name}.alarms.csv", intervals)
+        write_alarm_csv(out / f"{name}.alarms.csv", intervals, inputs.start_stamp_s)
         plot_screening(f"{name}: designed P_FA {arguments.false_alarm_probability:g} per "
                        "sample and test", inputs, samples, channels, intervals, period_s,
                        out / f"{name}.png", onset_s)

@@ -115,7 +115,7 @@ def test_screen_writes_tables_figures_summaries(logs: Path, calibration: Path) -
         assert json.loads((out / f"{name}.json").read_text()) == log
         assert (out / f"{name}.png").stat().st_size > 0
         assert (out / f"{name}.alarms.csv").read_text().splitlines()[0] == (
-            "start_s,end_s,channel,test,samples")
+            "start_s,end_s,channel,test,samples,start_stamp_s,end_stamp_s")
         assert set(log) >= {"samples", "tested_samples", "alarm_samples", "alarm_rate",
                             "first_combined_alarm_s", "intervals", "warnings"}
         counts = {test: log["alarm_samples"][test]["any"]

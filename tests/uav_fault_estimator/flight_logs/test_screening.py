@@ -106,9 +106,11 @@ def test_table_and_csv(tmp_path: Path) -> None:
     assert lines[0].split() == list(TABLE_COLUMNS)
     assert lines[1].split() == ["0.4", "1.0", "roll", "glrt", "4"]
     assert alarm_table([]) == "no alarms"
-    write_alarm_csv(tmp_path / "alarms.csv", intervals)
+    write_alarm_csv(tmp_path / "alarms.csv", intervals, 1500000000.25)
     with open(tmp_path / "alarms.csv", newline="") as stream:
         rows = list(csv.DictReader(stream))
-    assert list(rows[0]) == list(TABLE_COLUMNS)
+    assert list(rows[0]) == [*TABLE_COLUMNS, "start_stamp_s", "end_stamp_s"]
     assert [AlarmInterval(float(r["start_s"]), float(r["end_s"]), r["channel"], r["test"],
                           int(r["samples"])) for r in rows] == intervals
+    assert (rows[0]["start_stamp_s"], rows[0]["end_stamp_s"]) == ("1500000000.65",
+                                                                  "1500000001.25")

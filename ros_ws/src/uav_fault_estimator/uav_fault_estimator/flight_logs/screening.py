@@ -139,12 +139,19 @@ def alarm_table(intervals: Sequence[AlarmInterval]) -> str:
     return "\n".join(lines)
 
 
-def write_alarm_csv(path: Path, intervals: Sequence[AlarmInterval]) -> None:
-    """The intervals as CSV with the header TABLE_COLUMNS."""
+STAMP_COLUMNS = ("start_stamp_s", "end_stamp_s")  # the CSV's: in the log's own clock
+
+
+def write_alarm_csv(path: Path, intervals: Sequence[AlarmInterval],
+                    start_stamp_s: float) -> None:
+    """The intervals as CSV with the header TABLE_COLUMNS and STAMP_COLUMNS, the latter the
+    interval's ends in the log's own clock (start_stamp_s the log's start there [s])."""
     with open(path, "w", newline="") as stream:
         writer = csv.writer(stream)
-        writer.writerow(TABLE_COLUMNS)
-        writer.writerows([getattr(interval, column) for column in TABLE_COLUMNS]
+        writer.writerow(TABLE_COLUMNS + STAMP_COLUMNS)
+        writer.writerows([*(getattr(interval, column) for column in TABLE_COLUMNS),
+                          *(round(start_stamp_s + time_s, TIME_DECIMALS)
+                            for time_s in (interval.start_s, interval.end_s))]
                          for interval in intervals)
 
 
@@ -192,5 +199,5 @@ def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[Detecto
             axis.axvline(onset_s, color="r", linestyle="--", linewidth=1.0, label="onset")
         axis.legend(fontsize=7, loc="upper left")
     axes[0].set_title(title)
-    axes[-1].set_xlabel("time from the log's start [s]")
+    axes[-1].set_xlabel(f"time from the log's start [s] (its stamp: {inputs.start_stamp_s:.6f} s)")
     return save_figure(figure, path)
