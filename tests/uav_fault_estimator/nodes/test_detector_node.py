@@ -9,6 +9,7 @@ import subprocess
 import numpy as np
 import pytest
 import yaml
+from helpers.alarms import assert_alarms_are_the_cores
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
@@ -52,13 +53,7 @@ def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, st
     np.testing.assert_allclose(stamps, 0.2 * np.arange(1, expected + 1), atol=1e-9)
     assert {tuple(m.channel_names) for m in alarms} == {GENERATORS}
     # the same numbers as the core's offline run of the same flight
-    offline = run_detector(calibration, flight, 0.01)
-    np.testing.assert_allclose([m.statistic for m in alarms],
-                               [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
-    np.testing.assert_allclose([m.parameter_deviation for m in alarms],
-                               [s.parameter_deviation for s in offline], rtol=1e-9,
-                               equal_nan=True)
-    assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
+    assert_alarms_are_the_cores(alarms, run_detector(calibration, flight, 0.01))
     detector = SelfTuningDetector(calibration, 0.01)
     np.testing.assert_allclose(alarms[-1].threshold, detector.thresholds, rtol=1e-12)
     settled = [m for m in alarms if np.isfinite(m.statistic).all()]

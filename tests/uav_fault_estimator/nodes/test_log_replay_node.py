@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import yaml
 from helpers import simulated_logs
+from helpers.alarms import assert_alarms_are_the_cores
 from helpers.simulated_logs import ALFA, FIXTURE_AIRFRAME
 from uav_common.message_fields import air_data_array, setpoints_array, stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
@@ -112,16 +113,7 @@ def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
     offline = run_detector(load_calibration("", 25, 0.995), inputs.flight, 0.01)
     graph.spin(20.0, until=lambda: len(alarms) >= len(offline)
                and len(air_data) >= inputs.times_s.size)
-    assert [stamp_seconds(m.header.stamp) for m in alarms] == pytest.approx(
-        [s.time_s for s in offline], abs=1e-9)
-    np.testing.assert_allclose([m.statistic for m in alarms],
-                               [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
-    np.testing.assert_allclose([m.parameter_deviation for m in alarms],
-                               [s.parameter_deviation for s in offline], rtol=1e-9,
-                               equal_nan=True)
-    assert [list(m.alarm) for m in alarms] == [s.alarm.tolist() for s in offline]
-    assert [m.parameter_alarm for m in alarms] == [s.parameter_alarm for s in offline]
-    assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
+    assert_alarms_are_the_cores(alarms, offline)
     # air_data: the log's airspeed on every grid point, the vanes' angles missing
     received = np.array([air_data_array(m) for m in air_data])
     np.testing.assert_allclose(received[:, 0], inputs.airspeed_mps, rtol=1e-12,
@@ -174,14 +166,7 @@ def test_the_tracking_generators_run_through_the_graph_on_the_logs_setpoints(
                                inputs.setpoints, rtol=1e-12, equal_nan=True)
     assert np.isfinite(inputs.setpoints[:, :2]).any(axis=1).sum() > 0.9 * inputs.times_s.size
     assert {tuple(m.channel_names) for m in alarms} == {TRACKING_SET}
-    assert [stamp_seconds(m.header.stamp) for m in alarms] == pytest.approx(
-        [s.time_s for s in offline], abs=1e-9)
-    np.testing.assert_allclose([m.statistic for m in alarms],
-                               [s.statistic for s in offline], rtol=1e-9, equal_nan=True)
-    np.testing.assert_allclose([m.parameter_deviation for m in alarms],
-                               [s.parameter_deviation for s in offline], rtol=1e-9,
-                               equal_nan=True)
-    assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
+    assert_alarms_are_the_cores(alarms, offline)
 
 
 @pytest.mark.slow
