@@ -43,7 +43,8 @@ FIRST_SEED = 101
 def simulated(count: int) -> tuple[list, str]:
     """count fault-free flights flown now, and the calibration file's header saying which."""
     scenarios = fault_free_flights(count, FIRST_SEED)
-    flights = [flight[:3] for flight in fly_on_grid_each(scenarios, DEFAULT_SAMPLE_PERIOD_S)]
+    flights = [flight.detector_flight
+               for flight in fly_on_grid_each(scenarios, DEFAULT_SAMPLE_PERIOD_S)]
     header = (f"# Written by scripts/calibrate_detector.py: {len(scenarios)} fault-free flights "
               f"of\n# {describe_flights(scenarios)}.\n")
     return flights, header

@@ -82,9 +82,11 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
 
     # the detector's calibration from the recording: the same flight as the core flies it
     recorded = flight_from_recording(bag, typestore, 0.2)
-    for got, flown in zip(recorded, fly_on_grid(load_scenario(scenario), 0.2)[:3],
-                          strict=True):
-        np.testing.assert_allclose(got, flown, rtol=0, atol=1e-9)  # stamps: ns to s
+    flown = fly_on_grid(load_scenario(scenario), 0.2).detector_flight
+    for name, got, expected in zip(recorded._fields, recorded, flown, strict=True):
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9,  # stamps: ns to s
+                                   equal_nan=True, err_msg=name)
+    assert np.isfinite(recorded.setpoints[1:, :2]).all()  # the autopilot's roll and pitch
     calibration = tmp_path / "calibration.yaml"
     result = subprocess.run([sys.executable, str(CALIBRATE), "--bags", str(bag), "--out",
                              str(calibration)], capture_output=True, text=True, timeout=60)

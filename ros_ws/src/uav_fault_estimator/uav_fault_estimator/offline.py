@@ -96,19 +96,22 @@ def fly_and_estimate(
 
 class GridFlight(NamedTuple):
     """A simulated flight every period_s: times_s (K,) [s], states (K, 14), controls (K, 7),
-    seeded faults (K, 7) [%], in uav_common.channels order, and the measured true airspeed
-    (K,) [m/s] (NaN without air data)."""
+    seeded faults (K, 7) [%], in uav_common.channels order, the measured true airspeed
+    (K,) [m/s] (NaN without air data) and the autopilot's setpoints (K, 3) (SETPOINT_FIELDS
+    order)."""
 
     times_s: np.ndarray
     states: np.ndarray
     controls: np.ndarray
     seeded_pct: np.ndarray
     airspeed_mps: np.ndarray
+    setpoints: np.ndarray
 
     @property
     def detector_flight(self) -> DetectorFlight:
         """What the detector takes of it."""
-        return DetectorFlight(self.times_s, self.states, self.controls, self.airspeed_mps)
+        return DetectorFlight(self.times_s, self.states, self.controls, self.airspeed_mps,
+                              self.setpoints)
 
 
 def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
@@ -128,7 +131,8 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
                       np.array([s.controls for s in samples]),
                       np.array([s.seeded_faults_pct for s in samples]),
                       np.array([math.nan if s.air_data is None else s.air_data[_AIRSPEED]
-                                for s in samples]))
+                                for s in samples]),
+                      np.array([s.setpoints for s in samples]))
 
 
 def fly_on_grid_each(scenarios: Sequence[Scenario],

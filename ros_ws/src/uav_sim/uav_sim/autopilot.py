@@ -60,10 +60,15 @@ class FlightState:
 
 @dataclass(frozen=True)
 class SurfaceCommands:
+    """The surfaces and throttle commanded, and the attitude the loops were asked for (the
+    setpoints a detector's tracking generators hold the aircraft against) [rad]."""
+
     elevator_rad: float
     aileron_rad: float
     rudder_rad: float
     throttle: float
+    roll_cmd_rad: float
+    pitch_cmd_rad: float
 
 
 class PI:
@@ -130,4 +135,6 @@ class Autopilot:
             aileron_rad=clamp(aileron_rad, -limit, limit),
             rudder_rad=clamp(rudder_rad, -limit, limit),
             throttle=throttle,
+            roll_cmd_rad=roll_cmd_rad,
+            pitch_cmd_rad=pitch_cmd_rad,
         )

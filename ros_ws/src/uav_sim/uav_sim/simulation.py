@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import jsbsim
 import numpy as np
-from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
+from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, SETPOINT_FIELDS, STATE_CHANNELS
 
 from uav_sim.aircraft import (
     JSBSIM_DT_S,
@@ -84,6 +84,9 @@ class Sample:
     true_air_data: np.ndarray  # JSBSim's airspeed [m/s], alpha and beta [rad]
     wind_ned_mps: np.ndarray  # the true wind, background plus turbulence
     position_ne_m: np.ndarray  # true north, east of the start [m]
+    # the autopilot's latest setpoints, SETPOINT_FIELDS order (roll, pitch [rad]; its
+    # altitude hold commands no vertical velocity: NaN); NaN before its first command
+    setpoints: np.ndarray
 
 
 class Simulation:
@@ -122,6 +125,7 @@ class Simulation:
                 scenario.initial.altitude_m, CONTROL_STEPS * JSBSIM_DT_S,
                 np.random.default_rng([scenario.seed, TURBULENCE_STREAM]))
         self._faults_set: dict[str, float] | None = None  # what the aircraft holds now
+        self._setpoints = np.full(len(SETPOINT_FIELDS), math.nan)  # none commanded yet
         self._latest = self._sample()
 
     def _start(self) -> Trim:
@@ -199,6 +203,7 @@ class Simulation:
             np.array([fdm["velocities/v-north-fps"], fdm["velocities/v-east-fps"]]) * M_PER_FT,
         )
         commands = self.autopilot.update(state, roll_cmd_rad, dt_s)
+        self._setpoints = np.array([commands.roll_cmd_rad, commands.pitch_cmd_rad, math.nan])
         fdm["fcs/elevator-cmd-norm"] = commands.elevator_rad / SURFACE_LIMIT_RAD
         fdm["fcs/aileron-cmd-norm"] = commands.aileron_rad / SURFACE_LIMIT_RAD
         fdm["fcs/rudder-cmd-norm"] = commands.rudder_rad / SURFACE_LIMIT_RAD
@@ -266,4 +271,5 @@ class Simulation:
             true_air_data=true_air_data,
             wind_ned_mps=wind_ned_mps,
             position_ne_m=self._position_ne_m(),
+            setpoints=self._setpoints.copy(),
         )

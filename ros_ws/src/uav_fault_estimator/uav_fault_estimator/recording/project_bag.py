@@ -24,6 +24,7 @@ from rosbags.typesys.store import Typestore
 from uav_common.message_fields import (
     air_data_array,
     controls_array,
+    setpoints_array,
     stamp_nanoseconds,
     stamp_seconds,
     state_array,
@@ -32,6 +33,8 @@ from uav_common.message_fields import (
 from uav_common.package_data import share_dir
 from uav_common.sample_grid import on_grid
 
+from uav_fault_estimator.detection.detector import DetectorFlight
+from uav_fault_estimator.detection.generators import NO_SETPOINTS
 from uav_fault_estimator.estimation.model_calibration import SensorFlight
 
 MESSAGE_PACKAGES = ("uav_fault_msgs",)  # the project's own message types
@@ -159,26 +162,30 @@ def wall_span_s(bag: Path, topics: tuple[str, ...], received_ns: list[int]) -> f
     return 1e-9 * (max(received_ns) - min(received_ns)) if received_ns else 0.0
 
 
-def flight_from_recording(bag: Path, typestore: Typestore,
-                          period_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flight_from_recording(bag: Path, typestore: Typestore, period_s: float) -> DetectorFlight:
     """A recorded flight's /state and /controls matched by stamp, every period_s [s] of sim
-    time: times (K,) [s], states (K, 14), controls (K, 7) in uav_common.channels order, as
-    offline.fly_on_grid gives them for a simulated one. ValueError naming the bag when a
-    stream is missing."""
-    messages = read_topics(bag, typestore, ("/state", "/controls"))
-    controls = {stamp_nanoseconds(message.header.stamp): message
-                for message in messages["/controls"]}
+    time, with /air_data's airspeed and /autopilot_setpoints where recorded (NaN where not),
+    as offline.fly_on_grid gives them for a simulated one (its detector_flight).
+    ValueError naming the bag when /state or /controls is missing."""
+    messages = read_topics(bag, typestore, ("/state", "/controls", "/air_data",
+                                            "/autopilot_setpoints"))
+    by_stamp = {topic: {stamp_nanoseconds(message.header.stamp): message
+                        for message in messages[topic]}
+                for topic in ("/controls", "/air_data", "/autopilot_setpoints")}
+    controls = by_stamp["/controls"]
     if not messages["/state"] or not controls:
         raise ValueError(f"{bag}: no /state or no /controls recorded")
-    times, states, inputs = [], [], []
+    rows = []
     for message in messages["/state"]:
         stamp_ns = stamp_nanoseconds(message.header.stamp)
         time_s = stamp_seconds(message.header.stamp)
         if stamp_ns in controls and on_grid(time_s, period_s):
-            times.append(time_s)
-            states.append(state_array(message))
-            inputs.append(controls_array(controls[stamp_ns]))
-    return np.array(times), np.array(states), np.array(inputs)
+            air_data = by_stamp["/air_data"].get(stamp_ns)
+            setpoints = by_stamp["/autopilot_setpoints"].get(stamp_ns)
+            rows.append((time_s, state_array(message), controls_array(controls[stamp_ns]),
+                         np.nan if air_data is None else air_data_array(air_data)[0],
+                         NO_SETPOINTS if setpoints is None else setpoints_array(setpoints)))
+    return DetectorFlight(*(np.array(column) for column in zip(*rows, strict=True)))
 
 
 def sensor_flight_from_recording(bag: Path, typestore: Typestore) -> SensorFlight:

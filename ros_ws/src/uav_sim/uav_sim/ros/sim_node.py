@@ -2,7 +2,8 @@
 
 Publishes (relative names, STREAM_QOS): `state` (AircraftState), `controls`
 (ControlInputs), `air_data` (AirData; only when the scenario's aircraft carries air data),
-`wind/filtered` (WindEstimate); the simulation's truth `faults/seeded` (FaultVector) and
+`wind/filtered` (WindEstimate), `autopilot_setpoints` (AutopilotSetpoints: its autopilot's
+commanded roll and pitch); the simulation's truth `faults/seeded` (FaultVector) and
 `wind/true` (geometry_msgs/Vector3Stamped, NED m/s); and `/clock` (the simulation time, for
 nodes with use_sim_time) and `/diagnostics`. Run with use_sim_time, it follows the domain's
 `/clock` instead of publishing it (a second vehicle in the same domain): each step waits
@@ -31,6 +32,7 @@ from uav_common.ros.messages import (
     air_data_message,
     controls_message,
     fault_vector_message,
+    setpoints_message,
     stamp,
     state_message,
     true_wind_message,
@@ -48,7 +50,14 @@ from uav_common.ros.node_tools import (
 )
 from uav_common.ros.paced_publishing import PacedPublishers
 from uav_common.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
+from uav_fault_msgs.msg import (
+    AircraftState,
+    AirData,
+    AutopilotSetpoints,
+    ControlInputs,
+    FaultVector,
+    WindEstimate,
+)
 
 from uav_sim.flown_aircraft import DIAGNOSTIC_KEY
 from uav_sim.scenario import default_scenario_path, load_scenario
@@ -90,6 +99,7 @@ class SimNode(Node):
             self.create_publisher(WindEstimate, "wind/filtered", STREAM_QOS),
             self.create_publisher(FaultVector, "faults/seeded", STREAM_QOS),
             self.create_publisher(Vector3Stamped, "wind/true", STREAM_QOS),
+            self.create_publisher(AutopilotSetpoints, "autopilot_setpoints", STREAM_QOS),
         ]
         self.air_data_publisher = None
         if self.scenario.sensors.air_data:
@@ -120,6 +130,7 @@ class SimNode(Node):
             ),
             fault_vector_message(time_s, FAULT_NAMES, sample.seeded_faults_pct),
             true_wind_message(time_s, sample.wind_ned_mps),
+            setpoints_message(time_s, sample.setpoints),
         ]
         if self.air_data_publisher is not None:
             messages.append(air_data_message(time_s, sample.air_data))
