@@ -79,6 +79,12 @@ def test_default_scenario_values(default_data):
         ("aircraft", {"inertia_scale": [1.0, 1.1]}, "'aircraft.inertia_scale' must be [x, y, z]"),
         ("aircraft", {"sensor_bias": {"angle_of_attack_deg": 6}},
          "'aircraft.sensor_bias.angle_of_attack_deg' must be at most 5"),
+        ("guidance", {"method": "pure_pursuit"}, "'guidance.method' must be one of"),
+        ("guidance", {"method": "vector_field", "horizon_steps": 12},
+         "'guidance.method' is vector_field: the MPC settings (horizon_steps) belong to"),
+        ("guidance", {"method": "mpc", "horizon_steps": 1},
+         "'guidance.horizon_steps' must be in 2..100"),
+        ("guidance", {"method": "mpc", "sample_s": 0}, "'guidance.sample_s' must be at least"),
         (
             "sensor_dropouts",
             [{"channel": "pitot", "start_s": 1, "end_s": 2}],

@@ -31,30 +31,52 @@ class WaypointGuidance:
         approach_angle_rad: float = math.radians(60.0),
         path_gain_perm: float = 0.02,
         course_gain: float = 1.2,
+        switch_ahead_m: float = 0.0,
     ) -> None:
         self.waypoints = np.asarray(waypoints_ne_m, dtype=float)
         self.approach_angle_rad = approach_angle_rad
         self.path_gain_perm = path_gain_perm
         self.course_gain = course_gain
+        # the next leg is taken this far before the line through the leg's end normal to it
+        # (0: on it; the MPC guidance turns onto the next leg a turn radius ahead)
+        self.switch_ahead_m = switch_ahead_m
         self.leg = 0
 
-    def _leg_points(self) -> tuple[np.ndarray, np.ndarray]:
+    def leg_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """The current leg's start and end waypoints (north, east) [m]."""
         count = len(self.waypoints)
         return self.waypoints[self.leg % count], self.waypoints[(self.leg + 1) % count]
 
-    def roll_command(self, position_ne_m: np.ndarray, ground_velocity_ne_mps: np.ndarray) -> float:
-        """Bank angle [rad] for the aircraft at position_ne_m flying ground_velocity_ne_mps."""
-        start, end = self._leg_points()
-        direction = (end - start) / np.linalg.norm(end - start)
-        if np.dot(position_ne_m - end, direction) >= 0.0:
-            self.leg = (self.leg + 1) % len(self.waypoints)
-            start, end = self._leg_points()
-            direction = (end - start) / np.linalg.norm(end - start)
-        leg_course = math.atan2(direction[1], direction[0])
-        offset = position_ne_m - start
-        cross_track_m = direction[0] * offset[1] - direction[1] * offset[0]
+    def roll_command(self, position_ne_m: np.ndarray, ground_velocity_ne_mps: np.ndarray,
+                     dt_s: float = 0.0) -> float:
+        """Bank angle [rad] for the aircraft at position_ne_m flying ground_velocity_ne_mps
+        (dt_s, the time since the last call, is the MPC guidance's: the field has no memory
+        but its leg)."""
+        cross_track_m, leg_course = self.leg_errors(position_ne_m)
         course_cmd = leg_course - self.approach_angle_rad * (2.0 / math.pi) * math.atan(
             self.path_gain_perm * cross_track_m
         )
         course = math.atan2(ground_velocity_ne_mps[1], ground_velocity_ne_mps[0])
         return self.course_gain * wrap_angle(course_cmd - course)
+
+    def leg_errors(self, position_ne_m: np.ndarray) -> tuple[float, float]:
+        """The cross-track error (right of the leg positive) [m] and the leg's course [rad]
+        at position_ne_m, after moving to the next leg when the aircraft has come within
+        switch_ahead_m of the line through the current leg's end normal to it."""
+        start, end = self.leg_points()
+        direction = (end - start) / np.linalg.norm(end - start)
+        if np.dot(position_ne_m - end, direction) >= -self.switch_ahead_m:
+            self.leg = (self.leg + 1) % len(self.waypoints)
+            start, end = self.leg_points()
+            direction = (end - start) / np.linalg.norm(end - start)
+        offset = position_ne_m - start
+        return (float(direction[0] * offset[1] - direction[1] * offset[0]),
+                math.atan2(direction[1], direction[0]))
+
+
+def cross_track_errors_m(waypoints_ne_m: tuple[tuple[float, float], ...],
+                         positions_ne_m: np.ndarray) -> np.ndarray:
+    """The cross-track error [m] of each position (K, 2) of a flight along the waypoint loop,
+    legs switched as the guidance switches them."""
+    legs = WaypointGuidance(waypoints_ne_m)
+    return np.array([legs.leg_errors(position)[0] for position in positions_ne_m])

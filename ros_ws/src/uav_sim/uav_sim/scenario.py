@@ -10,6 +10,7 @@ ScenarioError naming the file and the key, before anything starts.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,7 @@ from uav_sim.flown_aircraft import (
     SensorBias,
     coefficient_names,
 )
+from uav_sim.mpc_guidance import MpcSettings
 from uav_sim.paths import scenarios_dir
 
 # from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
@@ -66,6 +68,19 @@ class Wind:
     down_mps: float
     turbulence: str
     filter_time_constant_s: float
+
+
+GUIDANCE_METHODS = ("vector_field", "mpc")
+
+
+@dataclass(frozen=True)
+class Guidance:
+    """How the autopilot flies the waypoints: method (GUIDANCE_METHODS: the course vector
+    field, guidance.py, or the paper's MPC yaw-rate guidance, mpc_guidance.py) and, for
+    mpc, its settings."""
+
+    method: str = "vector_field"
+    mpc: MpcSettings = field(default_factory=MpcSettings)
 
 
 @dataclass(frozen=True)
@@ -115,6 +130,7 @@ class Scenario:
     waypoints_ne_m: tuple[tuple[float, float], ...]
     wind: Wind
     sensors: SensorSuite = SensorSuite()
+    guidance: Guidance = Guidance()
     aircraft: FlownAircraft = NOMINAL
     faults: tuple[SeededFault, ...] = ()
     sensor_dropouts: tuple[SensorDropout, ...] = ()
@@ -162,6 +178,30 @@ def _wind(reader: Reader) -> Wind:
 def _sensors(reader: Reader) -> SensorSuite:
     reader.check_keys(set(), {"air_data", "noise"})
     return SensorSuite(air_data=reader.flag("air_data", True), noise=reader.flag("noise", True))
+
+
+# The guidance block's MPC keys and their ranges (MpcSettings' fields).
+_MPC_NUMBERS = {"sample_s": (0.1, 10.0), "cross_track_weight": (0.0, 1e3),
+                "course_weight": (0.0, 1e3), "yaw_rate_weight": (1e-6, 1e6),
+                "max_yaw_rate_change_radps": (1e-3, 10.0)}
+
+
+def _guidance(reader: Reader) -> Guidance:
+    """guidance: {method: vector_field | mpc, and for mpc optionally sample_s,
+    horizon_steps, cross_track_weight, course_weight, yaw_rate_weight,
+    max_yaw_rate_change_radps}."""
+    data = reader.data
+    reader.check_keys({"method"}, set(_MPC_NUMBERS) | {"horizon_steps"})
+    method = reader.choice("method", GUIDANCE_METHODS)
+    if method != "mpc" and len(data) > 1:
+        reader.fail(f"'{reader.key('method')}' is {method}: the MPC settings "
+                    f"({', '.join(sorted(set(data) - {'method'}))}) belong to method mpc")
+    defaults = MpcSettings()
+    settings = {name: reader.number(name, minimum=low, maximum=high)
+                for name, (low, high) in _MPC_NUMBERS.items() if name in data}
+    if "horizon_steps" in data:
+        settings["horizon_steps"] = reader.integer("horizon_steps", 2, 100)
+    return Guidance(method, dataclasses.replace(defaults, **settings))
 
 
 def _scale(reader: Reader, name: str) -> float:
@@ -261,7 +301,7 @@ def load_scenario(path: str | Path) -> Scenario:
     data = reader.data
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
-        {"sensors", "aircraft", "faults", "sensor_dropouts", "estimator"},
+        {"sensors", "guidance", "aircraft", "faults", "sensor_dropouts", "estimator"},
     )
     if reader.text("name") in (".", "..") or any(c in data["name"] for c in "/\\\0"):
         # demo.sh's default output folder is runs/<name>/
@@ -290,6 +330,7 @@ def load_scenario(path: str | Path) -> Scenario:
         waypoints_ne_m=_waypoints(reader),
         wind=_wind(reader.child("wind")),
         sensors=sensors,
+        guidance=_guidance(reader.child("guidance")) if "guidance" in data else Guidance(),
         aircraft=read_aircraft(reader.child("aircraft")) if "aircraft" in data else NOMINAL,
         faults=tuple(
             _fault(reader.element("faults", index))

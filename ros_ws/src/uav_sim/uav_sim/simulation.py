@@ -26,6 +26,7 @@ from uav_sim.aircraft import (
 from uav_sim.autopilot import Autopilot, FlightState
 from uav_sim.frames import north_east_m
 from uav_sim.guidance import WaypointGuidance
+from uav_sim.mpc_guidance import MpcGuidance
 from uav_sim.propeller import Propeller
 from uav_sim.scenario import Scenario
 from uav_sim.sensors import SensorModel
@@ -111,7 +112,10 @@ class Simulation:
         self.autopilot = Autopilot(
             self.trim, scenario.initial.altitude_m, scenario.initial.airspeed_mps
         )
-        self.guidance = WaypointGuidance(scenario.waypoints_ne_m)
+        self.guidance = (
+            MpcGuidance(scenario.waypoints_ne_m, self.autopilot.gains.roll_limit_rad,
+                        scenario.guidance.mpc)
+            if scenario.guidance.method == "mpc" else WaypointGuidance(scenario.waypoints_ne_m))
         self.filtered_wind = FilteredWind(scenario.wind.filter_time_constant_s, self.period_s)
         self.sensors = SensorModel(
             scenario.sensors.noise, self.period_s, self.origin_rad[0],
@@ -159,6 +163,12 @@ class Simulation:
     def finished(self) -> bool:
         return self.time_s >= self.scenario.duration_s - 0.5 * self.period_s
 
+    @property
+    def guidance_fallbacks(self) -> int:
+        """Guidance samples the MPC's QP was not solved, flown on the vector field instead
+        (0 with the vector field itself)."""
+        return self.guidance.fallbacks if isinstance(self.guidance, MpcGuidance) else 0
+
     def sample(self) -> Sample:
         """The latest sample (the initial one before the first step)."""
         return self._latest
@@ -201,6 +211,7 @@ class Simulation:
         roll_cmd_rad = self.guidance.roll_command(
             self._position_ne_m(),
             np.array([fdm["velocities/v-north-fps"], fdm["velocities/v-east-fps"]]) * M_PER_FT,
+            dt_s,
         )
         commands = self.autopilot.update(state, roll_cmd_rad, dt_s)
         self._setpoints = np.array([commands.roll_cmd_rad, commands.pitch_cmd_rad, math.nan])

@@ -198,9 +198,14 @@ class SimNode(Node):
             "scenario": self.scenario.name,
             DIAGNOSTIC_KEY: self.flown_aircraft,
             "missing_channels": ",".join(missing) or "none",
+            "guidance": self.scenario.guidance.method,
+            "guidance_fallbacks": self.simulation.guidance_fallbacks,
         }
         if missing:
             self.diagnostics.update(WARN, "sensor dropout: " + ", ".join(missing), values)
+        elif self.simulation.guidance_fallbacks:
+            self.diagnostics.update(WARN, "MPC guidance: a QP not solved, that step flown on "
+                                    "the vector field", values)
         else:
             self.diagnostics.update(OK, "flying", values)
 

@@ -1,0 +1,84 @@
+"""The MPC guidance (the embedded-estimation paper's autopilot): its prediction is the
+kinematics it states, its plans keep the yaw-rate limits, it brings an aircraft onto a leg
+(kinematic loop, exact), and in the simulator it flies the route in the paper's wind with
+every QP solved and tighter than the vector field (measured: docs/simulator.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from uav_sim.guidance import cross_track_errors_m
+from uav_sim.mpc_guidance import GRAVITY_MPS2, MpcGuidance, MpcSettings, prediction_matrices
+from uav_sim.paths import scenarios_dir
+from uav_sim.scenario import Guidance, load_scenario
+from uav_sim.simulation import Simulation
+
+SQUARE = ((0.0, 0.0), (1500.0, 0.0), (1500.0, 1500.0), (0.0, 1500.0))
+MAX_BANK_RAD = math.radians(30.0)
+
+
+@pytest.mark.timeout(10)
+def test_the_prediction_is_the_kinematics_stepped():
+    a, b = prediction_matrices(speed_mps=20.0, sample_s=2.0, steps=5)
+    x0, plan = np.array([30.0, 0.1]), np.array([0.05, -0.02, 0.0, 0.01, 0.03])
+    state, stepped = x0.copy(), []
+    for u in plan:  # u held over 2 s: psi' = u, e' = V psi
+        state = np.array([state[0] + 20.0 * 2.0 * state[1] + 20.0 * 2.0 ** 2 / 2.0 * u,
+                          state[1] + 2.0 * u])
+        stepped.append(state)
+    np.testing.assert_allclose(a @ x0 + b @ plan, np.concatenate(stepped), rtol=1e-12)
+
+
+def fly_kinematics(guidance: MpcGuidance, start_ne_m, course_rad: float, speed_mps: float,
+                   duration_s: float) -> tuple[np.ndarray, list[float]]:
+    """A point mass in coordinated turns at the commanded bank (limited to MAX_BANK_RAD),
+    guidance called at 120 Hz: its positions every 0.05 s and the banks commanded."""
+    dt_s, position = 1.0 / 120.0, np.array(start_ne_m, dtype=float)
+    positions, banks = [], []
+    for k in range(round(duration_s / dt_s)):
+        velocity = speed_mps * np.array([math.cos(course_rad), math.sin(course_rad)])
+        bank = float(np.clip(guidance.roll_command(position, velocity, dt_s),
+                             -MAX_BANK_RAD, MAX_BANK_RAD))
+        course_rad += GRAVITY_MPS2 * math.tan(bank) / speed_mps * dt_s
+        position = position + velocity * dt_s
+        banks.append(bank)
+        if k % 6 == 0:
+            positions.append(position)
+    return np.array(positions), banks
+
+
+@pytest.mark.timeout(30)
+def test_the_plan_brings_the_aircraft_onto_the_leg_within_its_limits():
+    guidance = MpcGuidance(SQUARE, MAX_BANK_RAD)
+    positions, _ = fly_kinematics(guidance, (0.0, 100.0), 0.0, 25.0, 50.0)
+    errors = cross_track_errors_m(SQUARE, positions)
+    print(f"cross-track error {errors[0]:.1f} m at the start, {errors[-1]:.3f} m after 50 s; "
+          f"largest |u| / limit {guidance.largest_command_ratio:.3f}; solve "
+          f"{np.median(guidance.solve_times_ms):.3f} ms median")
+    assert abs(errors[-1]) < 0.5 and guidance.fallbacks == 0
+    assert guidance.largest_command_ratio <= 1.0 + 1e-9
+    plan = guidance.plan
+    assert np.all(np.abs(np.diff(plan)) <= MpcSettings().max_yaw_rate_change_radps + 1e-6)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_in_the_simulator_mpc_flies_the_route_tighter_than_the_vector_field():
+    base = load_scenario(scenarios_dir() / "fault_free.yaml")  # the paper's wind, turbulence
+    rms = {}
+    for method in ("vector_field", "mpc"):
+        scenario = dataclasses.replace(base, duration_s=200.0, guidance=Guidance(method))
+        simulation = Simulation(scenario)
+        positions = []
+        while not simulation.finished:
+            positions.append(simulation.step().position_ne_m)
+        errors = cross_track_errors_m(scenario.waypoints_ne_m, np.array(positions))[200:]
+        rms[method] = float(np.sqrt(np.mean(errors ** 2)))
+        if method == "mpc":
+            assert simulation.guidance_fallbacks == 0
+            assert simulation.guidance.largest_command_ratio <= 1.0 + 1e-9
+    print(f"cross-track error RMS after 10 s [m]: {rms}")
+    assert rms["mpc"] < rms["vector_field"]
