@@ -166,7 +166,8 @@ def flight_from_recording(bag: Path, typestore: Typestore, period_s: float) -> D
     """A recorded flight's /state and /controls matched by stamp, every period_s [s] of sim
     time, with /air_data's airspeed and /autopilot_setpoints where recorded (NaN where not),
     as offline.fly_on_grid gives them for a simulated one (its detector_flight).
-    ValueError naming the bag when /state or /controls is missing."""
+    ValueError naming the bag when /state or /controls is missing or they share no stamp on
+    the grid."""
     messages = read_topics(bag, typestore, ("/state", "/controls", "/air_data",
                                             "/autopilot_setpoints"))
     by_stamp = {topic: {stamp_nanoseconds(message.header.stamp): message
@@ -185,6 +186,8 @@ def flight_from_recording(bag: Path, typestore: Typestore, period_s: float) -> D
             rows.append((time_s, state_array(message), controls_array(controls[stamp_ns]),
                          np.nan if air_data is None else air_data_array(air_data)[0],
                          NO_SETPOINTS if setpoints is None else setpoints_array(setpoints)))
+    if not rows:
+        raise ValueError(f"{bag}: /state and /controls share no stamp on the {period_s:g} s grid")
     return DetectorFlight(*(np.array(column) for column in zip(*rows, strict=True)))
 
 
