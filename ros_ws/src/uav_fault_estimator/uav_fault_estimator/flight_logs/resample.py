@@ -226,13 +226,18 @@ def detector_samples(log: FlightLog, airframe: Airframe | None,
     warnings = _warnings(log, airframe, surfaces_name, surfaces, period_s)
     if AIRSPEED in log.streams:
         airspeed_mps = resample(log.streams[AIRSPEED], times_s, LINEAR)[:, 0]
-    elif GROUND_VELOCITY in log.streams and WIND in log.streams:
+    elif has_airspeed_proxy(log):
         airspeed_mps = _air_relative_speed_mps(state, resample(log.streams[WIND], times_s,
                                                                LINEAR))
         warnings.append(f"log {log.source}: airspeed taken as the ground velocity less the "
                         "autopilot's wind estimate (horizontal)")
     return DetectorInputs(times_s, state, controls, airspeed_mps, tuple(warnings),
                           log.start_stamp_s, setpoints)
+
+
+def has_airspeed_proxy(log: FlightLog) -> bool:
+    """Whether the log has what stands in for a missing airspeed: ground velocity and wind."""
+    return GROUND_VELOCITY in log.streams and WIND in log.streams
 
 
 def _air_relative_speed_mps(state: np.ndarray, wind_mps: np.ndarray) -> np.ndarray:
@@ -247,7 +252,7 @@ def _warnings(log: FlightLog, airframe: Airframe | None, surfaces_name: str,
               surfaces: TimedSeries, period_s: float) -> list[str]:
     """detector_samples' lines: the reader's own, streams absent or slower than the grid, an
     airspeed other than the airframe names, mixed outputs the log contradicts."""
-    proxy = GROUND_VELOCITY in log.streams and WIND in log.streams
+    proxy = has_airspeed_proxy(log)
     lines = [*log.warnings, *(f"log {log.source}: no {name} stream (NaN on the grid)"
                               for name in (ATTITUDE, AIRSPEED) if name not in log.streams
                               and not (name == AIRSPEED and proxy))]
