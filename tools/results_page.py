@@ -197,6 +197,22 @@ def airspeed_schedule(data: Mapping[str, Any]) -> list[str]:
           data[name].get("roll_gain_std")) for name in present))
 
 
+# --- the guidance benchmark (benchmarks/bench_guidance.py) --------------------------------
+
+GUIDANCE_COLUMNS = ("wind_pct", "method", "cross_track_rms_m", "cross_track_largest_m",
+                    "corners", "solve_ms_median", "solve_ms_p99", "largest_yaw_rate_over_limit",
+                    "fallbacks")
+
+
+def guidance(data: Mapping[str, Any]) -> list[str]:
+    lines = [f"Scenario `{data.get('scenario')}` (seed {data.get('seed')}, "
+             f"{number(data.get('duration_s'))} s), cross-track error after the first "
+             f"{number(data.get('settle_s'))} s; wind in % of the airspeed, with its "
+             "turbulence; solve times are ProxSuite's.", ""]
+    return lines + table(GUIDANCE_COLUMNS, ([flight.get(column) for column in GUIDANCE_COLUMNS]
+                                            for flight in data["flights"]))
+
+
 # --- the detector on ALFA's real flights (scripts/alfa_benchmark.py) ----------------------
 
 ALFA_COLUMNS = ("flight", "failure", "outcome", "delay_s", "first_alarm_channel",
@@ -315,6 +331,10 @@ SECTIONS = (
             airspeed_schedule,
             "The detector calibrated at one airspeed, at several without and with the "
             "airspeed schedule, and tested at airspeeds it did not see (docs/detector.md)."),
+    Section("Guidance", "guidance.json",
+            "python -m benchmarks.bench_guidance --json docs/guidance.json", guidance,
+            "The default route flown with the course vector field and with the paper's MPC "
+            "guidance, in calm air and in wind (docs/simulator.md)."),
     Section("ALFA benchmark", "alfa_benchmark.json",
             "python scripts/alfa_benchmark.py ../shared/alfa/flights --json "
             "docs/alfa_benchmark.json", alfa_benchmark,

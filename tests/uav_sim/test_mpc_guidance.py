@@ -1,7 +1,7 @@
 """The MPC guidance (the embedded-estimation paper's autopilot): its prediction is the
 kinematics it states, its plans keep the yaw-rate limits, it brings an aircraft onto a leg
 (kinematic loop, exact), and in the simulator it flies the route in the paper's wind with
-every QP solved and tighter than the vector field (measured: docs/simulator.md)."""
+every QP solved and tighter than the vector field (measured: docs/results.md, Guidance)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from uav_sim.guidance import cross_track_errors_m
+from uav_sim.guidance import route_errors
 from uav_sim.mpc_guidance import GRAVITY_MPS2, MpcGuidance, MpcSettings, prediction_matrices
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import Guidance, load_scenario
@@ -54,7 +54,7 @@ def fly_kinematics(guidance: MpcGuidance, start_ne_m, course_rad: float, speed_m
 def test_the_plan_brings_the_aircraft_onto_the_leg_within_its_limits():
     guidance = MpcGuidance(SQUARE, MAX_BANK_RAD)
     positions, _ = fly_kinematics(guidance, (0.0, 100.0), 0.0, 25.0, 50.0)
-    errors = cross_track_errors_m(SQUARE, positions)
+    errors, _ = route_errors(SQUARE, positions)
     print(f"cross-track error {errors[0]:.1f} m at the start, {errors[-1]:.3f} m after 50 s; "
           f"largest |u| / limit {guidance.largest_command_ratio:.3f}; solve "
           f"{np.median(guidance.solve_times_ms):.3f} ms median")
@@ -64,21 +64,35 @@ def test_the_plan_brings_the_aircraft_onto_the_leg_within_its_limits():
     assert np.all(np.abs(np.diff(plan)) <= MpcSettings().max_yaw_rate_change_radps + 1e-6)
 
 
+@pytest.mark.timeout(10)
+def test_a_new_leg_is_planned_at_once():
+    guidance = MpcGuidance(SQUARE, MAX_BANK_RAD)
+    velocity = np.array([25.0, 0.0])
+    guidance.roll_command(np.array([1000.0, 0.0]), velocity, 1.0 / 120.0)  # plans leg 0
+    guidance.roll_command(np.array([1001.0, 0.0]), velocity, 1.0 / 120.0)
+    assert guidance.vector_field.leg == 0 and guidance.since_plan_s > 0.0
+    ahead = guidance.turn_radius_m(25.0)  # the next leg is taken a turn radius early
+    bank = guidance.roll_command(np.array([1500.0 - ahead + 1.0, 0.0]), velocity, 1.0 / 120.0)
+    assert guidance.vector_field.leg == 1 and guidance.since_plan_s == 0.0
+    assert bank > 0.0  # the right turn onto leg 1 begins with the new plan
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_in_the_simulator_mpc_flies_the_route_tighter_than_the_vector_field():
     base = load_scenario(scenarios_dir() / "fault_free.yaml")  # the paper's wind, turbulence
-    rms = {}
+    rms, corners = {}, {}
     for method in ("vector_field", "mpc"):
         scenario = dataclasses.replace(base, duration_s=200.0, guidance=Guidance(method))
         simulation = Simulation(scenario)
         positions = []
         while not simulation.finished:
             positions.append(simulation.step().position_ne_m)
-        errors = cross_track_errors_m(scenario.waypoints_ne_m, np.array(positions))[200:]
-        rms[method] = float(np.sqrt(np.mean(errors ** 2)))
+        errors, corners[method] = route_errors(scenario.waypoints_ne_m, np.array(positions))
+        rms[method] = float(np.sqrt(np.mean(errors[200:] ** 2)))  # after 10 s
         if method == "mpc":
             assert simulation.guidance_fallbacks == 0
             assert simulation.guidance.largest_command_ratio <= 1.0 + 1e-9
-    print(f"cross-track error RMS after 10 s [m]: {rms}")
+    print(f"cross-track error RMS after 10 s [m]: {rms}; corners passed: {corners}")
     assert rms["mpc"] < rms["vector_field"]
+    assert corners["mpc"] >= corners["vector_field"]  # no leg flown backwards

@@ -74,9 +74,15 @@ class WaypointGuidance:
                 math.atan2(direction[1], direction[0]))
 
 
-def cross_track_errors_m(waypoints_ne_m: tuple[tuple[float, float], ...],
-                         positions_ne_m: np.ndarray) -> np.ndarray:
+def route_errors(waypoints_ne_m: tuple[tuple[float, float], ...],
+                 positions_ne_m: np.ndarray) -> tuple[np.ndarray, int]:
     """The cross-track error [m] of each position (K, 2) of a flight along the waypoint loop,
-    legs switched as the guidance switches them."""
+    legs switched as the guidance switches them at their corners, and the corners passed (a
+    flight that turned back along a leg passes fewer)."""
     legs = WaypointGuidance(waypoints_ne_m)
-    return np.array([legs.leg_errors(position)[0] for position in positions_ne_m])
+    errors, corners, leg = [], 0, legs.leg
+    for position in positions_ne_m:
+        errors.append(legs.leg_errors(position)[0])
+        corners += legs.leg != leg
+        leg = legs.leg
+    return np.array(errors), corners

@@ -7,7 +7,9 @@ Every sample_s, about the current leg of the waypoint loop (guidance.py's legs a
 switch), with e the cross-track error (right of the leg positive) [m], psi the ground course's
 error from the leg's course [rad], V the ground speed [m/s] (held over the horizon) and u the
 yaw-rate command [rad/s], the kinematics e' = V sin(psi) ~ V psi, psi' = u are discretised
-exactly with u held over each sample T:
+exactly with u held over each sample T (small angles: V psi grows with |psi|, so no plan
+prefers flying a leg backwards, as a model in sin(psi), linearised about the plan, measured
+did in the paper's wind):
 
     psi[k+1] = psi[k] + T u[k]
     e[k+1]   = e[k] + V T psi[k] + V T^2 / 2 u[k]
@@ -20,9 +22,10 @@ subject to |u[k]| <= g tan(phi_max) / V (the bank limit of a coordinated turn; b
 constraints) and |u[k] - u[k-1]| <= du_max (u[-1] the command being held). Condensed on U:
 X = A x0 + B U, H = 2 (Bᵀ Q B + R), g = 2 Bᵀ Q A x0. The first command u[0] is held for T
 and flown as the bank of a coordinated turn at the current ground speed,
-phi = atan(V u / g), by the existing inner loops. The QP is warm-started from the previous
-plan shifted by one sample. A step the solver does not solve falls back to the vector field
-(guidance.WaypointGuidance) for that sample, counted. No ROS here.
+phi = atan(V u / g), by the existing inner loops; a leg switch starts a new sample at once.
+The QP is warm-started from the previous plan shifted by one sample. A step the solver does
+not solve falls back to the vector field (guidance.WaypointGuidance) for that sample,
+counted. No ROS here.
 """
 
 from __future__ import annotations
@@ -104,9 +107,11 @@ class MpcGuidance:
         speed_mps = max(float(np.linalg.norm(ground_velocity_ne_mps)), MIN_SPEED_MPS)
         # turn onto the next leg a turn radius ahead of its corner
         self.vector_field.switch_ahead_m = self.turn_radius_m(speed_mps)
+        leg = self.vector_field.leg
         fallback = self.vector_field.roll_command(position_ne_m, ground_velocity_ne_mps)
         self.since_plan_s += dt_s
-        if self.since_plan_s >= self.settings.sample_s - 1e-9:
+        # a new leg is a new problem: planned at once, not up to sample_s late
+        if self.since_plan_s >= self.settings.sample_s - 1e-9 or self.vector_field.leg != leg:
             self.since_plan_s = 0.0
             solved = self.replan(self.leg_state(position_ne_m, ground_velocity_ne_mps),
                                  speed_mps)
