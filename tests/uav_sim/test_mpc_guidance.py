@@ -53,15 +53,31 @@ def fly_kinematics(guidance: MpcGuidance, start_ne_m, course_rad: float, speed_m
 @pytest.mark.timeout(30)
 def test_the_plan_brings_the_aircraft_onto_the_leg_within_its_limits():
     guidance = MpcGuidance(SQUARE, MAX_BANK_RAD)
-    positions, _ = fly_kinematics(guidance, (0.0, 100.0), 0.0, 25.0, 50.0)
+    positions, _ = fly_kinematics(guidance, (300.0, 100.0), 0.0, 25.0, 40.0)
     errors, _ = route_errors(SQUARE, positions)
-    print(f"cross-track error {errors[0]:.1f} m at the start, {errors[-1]:.3f} m after 50 s; "
+    print(f"cross-track error {errors[0]:.1f} m at the start, {errors[-1]:.3f} m after 40 s; "
           f"largest |u| / limit {guidance.largest_command_ratio:.3f}; solve "
           f"{np.median(guidance.solve_times_ms):.3f} ms median")
     assert abs(errors[-1]) < 0.5 and guidance.fallbacks == 0
-    assert guidance.largest_command_ratio <= 1.0 + 1e-9
+    assert guidance.largest_command_ratio <= 1.0 + 1e-6  # to the solver's 1e-7 rad/s
     plan = guidance.plan
     assert np.all(np.abs(np.diff(plan)) <= MpcSettings().max_yaw_rate_change_radps + 1e-6)
+
+
+@pytest.mark.timeout(30)
+def test_the_same_problem_gets_the_same_plan_bit_for_bit():
+    """ProxSuite's answer to one QP differs in its last bits from one QP object to the next
+    (two answers among 30 objects, measured); the guidance keeps its plans to the solver's
+    tolerance so that a flight is the same every time it is flown."""
+    plans, kept = set(), []
+    for k in range(30):
+        kept.append(np.zeros(3 * k + 1))  # objects land elsewhere in memory
+        guidance = MpcGuidance(SQUARE, MAX_BANK_RAD)
+        for cross_track_m in (120.0, 80.0, -35.0):
+            guidance.replan(np.array([cross_track_m, 0.3]), 25.0)
+        plans.add(guidance.plan.tobytes())
+        kept.append(guidance)
+    assert len(plans) == 1
 
 
 @pytest.mark.timeout(10)
@@ -92,7 +108,7 @@ def test_in_the_simulator_mpc_flies_the_route_tighter_than_the_vector_field():
         rms[method] = float(np.sqrt(np.mean(errors[200:] ** 2)))  # after 10 s
         if method == "mpc":
             assert simulation.guidance_fallbacks == 0
-            assert simulation.guidance.largest_command_ratio <= 1.0 + 1e-9
+            assert simulation.guidance.largest_command_ratio <= 1.0 + 1e-6  # 1e-7 rad/s
     print(f"cross-track error RMS after 10 s [m]: {rms}; corners passed: {corners}")
     assert rms["mpc"] < rms["vector_field"]
     assert corners["mpc"] >= corners["vector_field"]  # no leg flown backwards

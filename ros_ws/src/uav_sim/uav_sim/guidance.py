@@ -76,13 +76,20 @@ class WaypointGuidance:
 
 def route_errors(waypoints_ne_m: tuple[tuple[float, float], ...],
                  positions_ne_m: np.ndarray) -> tuple[np.ndarray, int]:
-    """The cross-track error [m] of each position (K, 2) of a flight along the waypoint loop,
-    legs switched as the guidance switches them at their corners, and the corners passed (a
-    flight that turned back along a leg passes fewer)."""
-    legs = WaypointGuidance(waypoints_ne_m)
-    errors, corners, leg = [], 0, legs.leg
-    for position in positions_ne_m:
-        errors.append(legs.leg_errors(position)[0])
-        corners += legs.leg != leg
-        leg = legs.leg
-    return np.array(errors), corners
+    """The cross-track error [m] of each position (K, 2) of a flight along the waypoint loop:
+    its distance to the nearest leg (segment), right of it positive; and the corners passed
+    forwards, less those passed backwards (the nearest leg's changes: a flight that turned
+    back along a leg passes fewer). The nearest leg, not the guidance's own leg switch, so
+    that a corner cut short is measured as flown."""
+    starts = np.asarray(waypoints_ne_m, dtype=float)
+    legs = np.roll(starts, -1, axis=0) - starts  # (L, 2)
+    lengths = np.linalg.norm(legs, axis=1)
+    offsets = positions_ne_m[:, None, :] - starts[None, :, :]  # (K, L, 2)
+    along = np.clip(np.einsum("kld,ld->kl", offsets, legs) / lengths ** 2, 0.0, 1.0)
+    distances = np.linalg.norm(offsets - along[..., None] * legs[None], axis=2)
+    nearest = np.argmin(distances, axis=1)
+    rows = np.arange(len(nearest))
+    right = np.sign(legs[nearest, 0] * offsets[rows, nearest, 1]
+                    - legs[nearest, 1] * offsets[rows, nearest, 0])
+    steps = (np.diff(nearest) + 1) % len(starts) - 1  # +1 forwards, -1 backwards
+    return right * distances[rows, nearest], int(np.sum(steps[np.abs(steps) == 1]))

@@ -18,12 +18,13 @@ and the plan U = (u[0] .. u[N-1]) minimises
 
     sum_{k=1..N} q_e e[k]^2 + q_psi psi[k]^2  +  sum_{k=0..N-1} r u[k]^2
 
-subject to |u[k]| <= g tan(phi_max) / V (the bank limit of a coordinated turn; box
-constraints) and |u[k] - u[k-1]| <= du_max (u[-1] the command being held). Condensed on U:
-X = A x0 + B U, H = 2 (Bᵀ Q B + R), g = 2 Bᵀ Q A x0. The first command u[0] is held for T
+subject to |u[k]| <= g tan(phi_max) / V (the bank limit of a coordinated turn) and
+|u[k] - u[k-1]| <= du_max (u[-1] the command being held), both as rows l <= C U <= u.
+Condensed on U: X = A x0 + B U, H = 2 (Bᵀ Q B + R), g = 2 Bᵀ Q A x0. The first command u[0] is held for T
 and flown as the bank of a coordinated turn at the current ground speed,
 phi = atan(V u / g), by the existing inner loops; a leg switch starts a new sample at once.
-The QP is warm-started from the previous plan shifted by one sample. A step the solver does
+The QP is warm-started from the previous plan and its duals shifted by one sample; the plan
+is kept to the solver's tolerance, so that the same flight is flown twice. A step the solver does
 not solve falls back to the vector field (guidance.WaypointGuidance) for that sample,
 counted. No ROS here.
 """
@@ -39,6 +40,9 @@ import proxsuite
 from uav_sim.guidance import WaypointGuidance, wrap_angle
 
 GRAVITY_MPS2 = 9.80665
+# sim_node's /diagnostics keys: the scenario's guidance method, and its steps flown on the
+# vector field because a QP was not solved
+METHOD_KEY, FALLBACKS_KEY = "guidance", "guidance_fallbacks"
 MIN_SPEED_MPS = 5.0  # below it the yaw-rate limit g tan(phi) / V is meaningless
 
 
@@ -78,6 +82,11 @@ def prediction_matrices(speed_mps: float, sample_s: float,
     return a, b
 
 
+def shifted(plan: np.ndarray) -> np.ndarray:
+    """A plan one sample on: its steps from the second, the last repeated."""
+    return np.concatenate([plan[1:], plan[-1:]])
+
+
 class MpcGuidance:
     """Bank-angle commands for the waypoint loop from a yaw-rate plan made every sample_s."""
 
@@ -87,18 +96,22 @@ class MpcGuidance:
         self.max_bank_rad = max_bank_rad
         self.vector_field = WaypointGuidance(waypoints_ne_m)  # legs, and the fallback
         n = settings.horizon_steps
-        self.qp = proxsuite.proxqp.dense.QP(n, 0, n - 1, True)
+        # the bounds as rows of C, not ProxSuite's box constraints: with those, duals passed
+        # to a warm start corrupt its memory (0.8.0), and duals not passed start from
+        # whatever its memory held
+        self.qp = proxsuite.proxqp.dense.QP(n, 0, 2 * n - 1)
         self.qp.settings.eps_abs = settings.eps_abs
         self.qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
         self.qp.settings.compute_timings = True
         self.initialised = False
-        self.differences = np.eye(n - 1, n, 1) - np.eye(n - 1, n)  # u[k+1] - u[k]
+        # u[0] .. u[N-1], then u[k+1] - u[k]
+        self.constraints = np.vstack([np.eye(n), np.eye(n - 1, n, 1) - np.eye(n - 1, n)])
         self.plan: np.ndarray | None = None
         self.command_radps = 0.0  # the yaw rate being held
         self.since_plan_s = math.inf
         self.fallbacks = 0  # samples flown on the vector field: the QP not solved
         self.solve_times_ms: list[float] = []
-        self.largest_command_ratio = 0.0  # |u| / its limit, the largest planned
+        self.largest_command_ratio = 0.0  # |u| / its limit, the largest the solver planned
 
     def roll_command(self, position_ne_m: np.ndarray, ground_velocity_ne_mps: np.ndarray,
                      dt_s: float) -> float:
@@ -146,30 +159,39 @@ class MpcGuidance:
         gradient = 2.0 * b.T @ (weights * (a @ state))
         limit = GRAVITY_MPS2 * math.tan(self.max_bank_rad) / speed_mps
         change = s.max_yaw_rate_change_radps
-        # the first step's change is about the command being held: a box on u[0]
+        # the first step's change is about the command being held: a bound on u[0]
         low = np.full(n, -limit)
         high = np.full(n, limit)
         low[0] = max(-limit, self.command_radps - change)
         high[0] = min(limit, self.command_radps + change)
         if low[0] > high[0]:  # the held command lies outside a smaller limit: move to it
             low[0] = high[0] = float(np.clip(self.command_radps, -limit, limit))
-        lower, upper = np.full(n - 1, -change), np.full(n - 1, change)
-        arguments = (hessian, gradient, None, None, self.differences, lower, upper)
+        arguments = (hessian, gradient, None, None, self.constraints,
+                     np.concatenate([low, np.full(n - 1, -change)]),
+                     np.concatenate([high, np.full(n - 1, change)]))
         if self.initialised:
-            self.qp.update(*arguments, l_box=low, u_box=high)
+            self.qp.update(*arguments)
         else:
-            self.qp.init(*arguments, l_box=low, u_box=high)
+            self.qp.init(*arguments)
             self.initialised = True
-        guess = (np.zeros(n) if self.plan is None
-                 else np.concatenate([self.plan[1:], self.plan[-1:]]))
-        self.qp.solve(np.clip(guess, low, high), None, None)
+        if self.plan is None:
+            guess, duals = np.zeros(n), np.zeros(2 * n - 1)
+        else:  # one sample on
+            z = self.qp.results.z
+            guess = np.clip(shifted(self.plan), low, high)
+            duals = np.concatenate([shifted(z[:n]), shifted(z[n:])])
+        self.qp.solve(guess, None, duals)
         results = self.qp.results
         self.solve_times_ms.append(results.info.run_time * 1e-3)
         if results.info.status != proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED or not (
                 np.all(np.isfinite(results.x))):
             return False
-        self.plan = np.clip(results.x, low, high)
-        self.command_radps = float(self.plan[0])
+        # kept to the solver's tolerance: below it ProxSuite's answer to the same QP differs
+        # in its last bits from one QP object to the next (its vectorised sums follow where
+        # its workspace lies in memory), and a flight would not be the same twice
+        answer = np.round(results.x / s.eps_abs) * s.eps_abs
         self.largest_command_ratio = max(self.largest_command_ratio,
-                                         float(np.max(np.abs(self.plan))) / limit)
+                                         float(np.max(np.abs(answer))) / limit)
+        self.plan = np.clip(answer, low, high)  # within the solver's tolerance already
+        self.command_radps = float(self.plan[0])
         return True
