@@ -124,6 +124,14 @@ def test_sensors_default_to_air_data_and_noise(tmp_path, default_data):
     assert scenario.sensors.air_data and not scenario.sensors.noise
 
 
+def test_guidance_defaults_to_the_vector_field_and_reads_mpc_settings(tmp_path, default_data):
+    default_data.pop("guidance", None)
+    assert load_scenario(write(tmp_path, default_data)).guidance.method == "vector_field"
+    default_data["guidance"] = {"method": "mpc", "horizon_steps": 15, "sample_s": 1.0}
+    settings = load_scenario(write(tmp_path, default_data)).guidance.mpc
+    assert (settings.horizon_steps, settings.sample_s) == (15, 1.0)
+
+
 def test_air_data_dropouts_are_nan_in_the_air_data_only(default_scenario):
     scenario = dataclasses.replace(
         default_scenario, duration_s=3.0,

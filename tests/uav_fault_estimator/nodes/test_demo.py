@@ -87,6 +87,8 @@ def check_metrics(out: Path) -> dict:
     assert metrics["solver"]["failures"] == 0
     # what flew and what the models were, from sim_node's and residual_node's /diagnostics
     assert isinstance(metrics["aircraft"]["flown"], dict)
+    assert metrics["aircraft"]["guidance"] == "vector_field"  # the default guidance
+    assert metrics["aircraft"]["guidance_fallbacks"] == 0
     assert metrics["aircraft"]["model"] == SHIPPED_MODEL
     for name in FIGURES:
         assert (out / name).stat().st_size > 10_000, name
@@ -149,9 +151,11 @@ def test_two_aircraft_in_one_domain_each_estimate_as_their_own_offline_chain(
         start_process, short_scenario, run_dir) -> None:
     """Two scenarios: /uav1 and /uav2 fly on the first simulator's /clock, one recorder
     takes both, and each vehicle's estimates, read under its namespace, are its own core
-    chain's to the last digit."""
+    chain's to the last digit; /uav2 flies the MPC guidance, every QP solved."""
     duration_s = 60.0
-    scenarios = [short_scenario(duration_s, faults=[fault]) for fault in TWO_FAULTS]
+    methods = ("vector_field", "mpc")
+    scenarios = [short_scenario(duration_s, faults=[fault], guidance={"method": method})
+                 for fault, method in zip(TWO_FAULTS, methods, strict=True)]
     demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
     assert demo.wait(120) == 0, demo.output()
     output = demo.output()
@@ -161,10 +165,12 @@ def test_two_aircraft_in_one_domain_each_estimate_as_their_own_offline_chain(
     assert "following /clock" in (run_dir / "logs/uav2/sim_node.log").read_text()
     assert "following /clock" not in (run_dir / "logs/uav1/sim_node.log").read_text()
     typestore = project_typestore()
-    for namespace, scenario, fault in zip(("/uav1", "/uav2"), scenarios, TWO_FAULTS,
-                                          strict=True):
+    for namespace, scenario, fault, method in zip(("/uav1", "/uav2"), scenarios, TWO_FAULTS,
+                                                  methods, strict=True):
         metrics = json.loads((run_dir / namespace[1:] / "metrics.json").read_text())
         assert metrics["pipeline"]["messages_received"] == 120
+        assert metrics["aircraft"]["guidance"] == method
+        assert metrics["aircraft"]["guidance_fallbacks"] == 0
         assert metrics["solver"]["name"] == "proxsuite"  # its own mhe_node's /diagnostics
         assert [name for name, entry in metrics["faults"].items() if entry["seeded"]] == [
             fault["name"]]

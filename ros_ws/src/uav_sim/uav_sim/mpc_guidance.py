@@ -20,13 +20,13 @@ and the plan U = (u[0] .. u[N-1]) minimises
 
 subject to |u[k]| <= g tan(phi_max) / V (the bank limit of a coordinated turn) and
 |u[k] - u[k-1]| <= du_max (u[-1] the command being held), both as rows l <= C U <= u.
-Condensed on U: X = A x0 + B U, H = 2 (Bᵀ Q B + R), g = 2 Bᵀ Q A x0. The first command u[0] is held for T
-and flown as the bank of a coordinated turn at the current ground speed,
+Condensed on U: X = A x0 + B U, H = 2 (Bᵀ Q B + R), g = 2 Bᵀ Q A x0. The first command
+u[0] is held for T and flown as the bank of a coordinated turn at the current ground speed,
 phi = atan(V u / g), by the existing inner loops; a leg switch starts a new sample at once.
 The QP is warm-started from the previous plan and its duals shifted by one sample; the plan
-is kept to the solver's tolerance, so that the same flight is flown twice. A step the solver does
-not solve falls back to the vector field (guidance.WaypointGuidance) for that sample,
-counted. No ROS here.
+is kept to the solver's tolerance, so that the same flight is flown twice. A step the
+solver does not solve falls back to the vector field (guidance.WaypointGuidance) for that
+sample, counted. No ROS here.
 """
 
 from __future__ import annotations

@@ -77,7 +77,9 @@ GUIDANCE_METHODS = ("vector_field", "mpc")
 class Guidance:
     """How the autopilot flies the waypoints: method (GUIDANCE_METHODS: the course vector
     field, guidance.py, or the paper's MPC yaw-rate guidance, mpc_guidance.py) and, for
-    mpc, its settings."""
+    mpc, its settings. The vector field by default: the MPC tracks the route closer, but
+    the estimator, tuned on the field's flights, keeps less margin to its threshold on the
+    MPC's (docs/simulator.md)."""
 
     method: str = "vector_field"
     mpc: MpcSettings = field(default_factory=MpcSettings)

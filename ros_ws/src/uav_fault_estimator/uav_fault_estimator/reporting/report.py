@@ -13,6 +13,8 @@ from uav_common.health import CPU_KEY, hardware_id
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
 from uav_sim.flown_aircraft import DIAGNOSTIC_KEY as FLOWN_AIRCRAFT_KEY
+from uav_sim.mpc_guidance import FALLBACKS_KEY as GUIDANCE_FALLBACKS_KEY
+from uav_sim.mpc_guidance import METHOD_KEY as GUIDANCE_KEY
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
 from uav_fault_estimator.estimation.model_file import MODEL_KEY
@@ -117,10 +119,14 @@ def solver_method(diagnostics: list, namespace: str = "") -> str | None:
 
 def aircraft(diagnostics: list, namespace: str = "") -> dict:
     """What flew and what the models were: sim_node's flown aircraft (where it differs from
-    the model; {} the model itself) and residual_node's model; None where a node did not
-    say (a recording of a real flight, or of an older run)."""
+    the model; {} the model itself), its guidance method and the steps that fell back to
+    the vector field, and residual_node's model; None where a node did not say (a recording
+    of a real flight, or of an older run)."""
     flown = last_value(diagnostics, namespace, "sim_node", FLOWN_AIRCRAFT_KEY)
+    fallbacks = last_value(diagnostics, namespace, "sim_node", GUIDANCE_FALLBACKS_KEY)
     return {"flown": None if flown is None else json.loads(flown),
+            "guidance": last_value(diagnostics, namespace, "sim_node", GUIDANCE_KEY),
+            "guidance_fallbacks": None if fallbacks is None else int(fallbacks),
             "model": last_value(diagnostics, namespace, "residual_node", MODEL_KEY)}
 
 
@@ -206,6 +212,10 @@ def table(metrics: dict) -> str:
         lines.append("CPU per simulated second [s]: " + ", ".join(
             f"{name} {cpu:.3f}" for name, cpu in pipeline["cpu_s_per_sim_s"].items()))
     flown = (metrics.get("aircraft") or {})
+    if flown.get("guidance") is not None:
+        fallbacks = flown.get("guidance_fallbacks")
+        lines.append(f"guidance: {flown['guidance']}" + (
+            f", {fallbacks} steps flown on the vector field" if fallbacks else ""))
     if flown.get("flown") is not None:
         lines.append(f"flown aircraft: {_aircraft_text(flown['flown'])}; models: "
                      f"{flown['model'] or 'not said'}")

@@ -60,6 +60,7 @@ from uav_fault_msgs.msg import (
 )
 
 from uav_sim.flown_aircraft import DIAGNOSTIC_KEY
+from uav_sim.mpc_guidance import FALLBACKS_KEY, METHOD_KEY
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 
@@ -198,8 +199,8 @@ class SimNode(Node):
             "scenario": self.scenario.name,
             DIAGNOSTIC_KEY: self.flown_aircraft,
             "missing_channels": ",".join(missing) or "none",
-            "guidance": self.scenario.guidance.method,
-            "guidance_fallbacks": self.simulation.guidance_fallbacks,
+            METHOD_KEY: self.scenario.guidance.method,
+            FALLBACKS_KEY: self.simulation.guidance_fallbacks,
         }
         if missing:
             self.diagnostics.update(WARN, "sensor dropout: " + ", ".join(missing), values)
