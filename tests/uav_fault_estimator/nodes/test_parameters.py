@@ -19,6 +19,7 @@ from uav_common.ros.node_tools import (
     checked_value,
     declare_parameters,
 )
+from uav_common.ros.parameter_files import wildcard_only_names
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_estimator.nodes import (
     detector_node,
@@ -239,6 +240,42 @@ def test_integers_for_reals_fly(short_scenario, tmp_path):
     assert result.returncode == 0, result
     assert "1 s at 20 Hz, real-time factor 0" in result.stderr + result.stdout, result
     assert "finished at 1 s of simulation time" in result.stderr + result.stdout, result
+
+
+@pytest.mark.timeout(10)
+def test_a_shared_files_wildcard_names_are_told_apart_from_the_nodes_own(tmp_path):
+    shared = tmp_path / "shared.yaml"
+    shared.write_text("/**:\n  ros__parameters:\n    horizon: 50\n    qos: {depth: 5}\n"
+                      "    scenario: a.yaml\n"
+                      "/uav1/sim_node:\n  ros__parameters:\n    scenario: b.yaml\n"
+                      "mhe_node:\n  ros__parameters:\n    horizn: 3\n")
+    argv = ["sim_node", "--ros-args", "--params-file", str(shared), "-p", "qos.depth:=1",
+            "--", "--params-file", "not_a_ros_argument.yaml"]
+    # scenario is named for sim_node, qos.depth given with -p: strict; horizon only shared
+    assert wildcard_only_names(argv, "sim_node") == {"horizon"}
+    assert wildcard_only_names(argv, "mhe_node") == {"scenario", "horizon"}
+    assert wildcard_only_names(["sim_node"], "sim_node") == set()  # no ROS arguments
+    unreadable = ["x", "--ros-args", "--params-file", str(tmp_path / "missing.yaml")]
+    assert wildcard_only_names(unreadable, "sim_node") == set()  # rcl's to refuse
+
+
+@pytest.mark.integration
+@pytest.mark.timeout(60)
+def test_a_shared_parameter_file_flies_and_names_what_it_ignores(short_scenario, tmp_path):
+    """One file for every node, as ROS users write it: sim_node takes its own keys of the
+    /** section and says, in one warning line, which it ignores."""
+    ros_args = params_file(tmp_path, ros_params(
+        "/**", f"scenario: {short_scenario(1.0)};real_time_factor: 0.0;"
+        "wait_for_subscribers: 0;horizon: 50;false_alarm_probability: 0.001"))
+    result = subprocess.run(ros2_run_argv("uav_sim", "sim_node", ros_args=ros_args),
+                            capture_output=True, text=True, timeout=50)
+    output = result.stderr + result.stdout
+    assert result.returncode == 0, result
+    warnings = [line for line in output.splitlines() if "ignoring" in line]
+    assert len(warnings) == 1 and warnings[0].endswith(
+        "ignoring false_alarm_probability, horizon of the parameter file's /** section: "
+        "this node has no such parameters"), output
+    assert "finished at 1 s of simulation time" in output, output
 
 
 @pytest.mark.timeout(30)

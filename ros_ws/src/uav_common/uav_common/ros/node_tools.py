@@ -34,6 +34,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from uav_common.health import CPU_KEY, hardware_id
 from uav_common.package_data import default_parameters
+from uav_common.ros.parameter_files import wildcard_only_names
 
 # Sensor-rate streams and estimates: reliable and keep-all, so that a fast simulation loses
 # nothing while subscribers catch up.
@@ -149,7 +150,9 @@ def declare_parameters(
 
     Values given on the command line or in a --params-file override the defaults, after a
     check: of the type (an integer is taken for a real), of the range, and that the node has
-    such a parameter. A bad one raises ParameterError (one line) before anything is declared.
+    such a parameter. A bad one raises ParameterError (one line) before anything is declared;
+    a name the node lacks that only a file's `/**` section gave it is ignored, with one
+    warning naming them all (parameter_files.py).
     Live parameters (ParameterSpec.live) changed at run time go, checked the same way, to
     apply_changes; once it has applied them the returned dict holds the new values.
     """
@@ -164,6 +167,12 @@ def declare_parameters(
     overrides = {name: parameter.value for name, parameter in node._parameter_overrides.items()}
     unknown = sorted(name for name in overrides
                      if name not in specs and not node.has_parameter(name))
+    shared = sorted(set(unknown) & wildcard_only_names(_process_arguments(), node.get_name()))
+    if shared:  # a file written for every node: its keys for others are not this one's
+        node.get_logger().warning(
+            f"ignoring {', '.join(shared)} of the parameter file's /** section: this node "
+            f"has no such parameter{'s' if len(shared) > 1 else ''}")
+        unknown = [name for name in unknown if name not in shared]
     if unknown:
         raise ParameterError(
             f"unknown parameter{'s' if len(unknown) > 1 else ''} {', '.join(unknown)} (this "
@@ -334,9 +343,21 @@ def _rcl_message(error: Exception) -> str:
     return text.removeprefix("failed to initialize rcl: ")
 
 
+class _Arguments:
+    """The arguments rclpy was initialised with by run_node (None: the process's own)."""
+
+    given: list[str] | None = None
+
+
+def _process_arguments() -> list[str]:
+    """The arguments the node's ROS arguments come from."""
+    return _Arguments.given if _Arguments.given is not None else sys.argv
+
+
 def _init(name: str, args: list[str] | None) -> bool:
     """rclpy.init without rclpy's signal handlers; False, after one line, when rcl cannot
     parse the arguments (a params file that does not parse or does not exist, a bad -p)."""
+    _Arguments.given = args
     # rcl's own `Failed to parse global arguments` line would come before ours: muted.
     rclpy.logging.set_logger_level("rcl", rclpy.logging.LoggingSeverity.FATAL)
     try:
