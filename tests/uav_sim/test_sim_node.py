@@ -1,5 +1,5 @@
-"""sim_node as a process: every stream at the sensor rate in sim time, /clock, its own end;
-no air_data when the aircraft carries none."""
+"""sim_node as a process: every stream at the sensor rate in sim time, /clock and
+/diagnostics stamped in it, its own end; no air_data when the aircraft carries none."""
 
 from __future__ import annotations
 
@@ -7,10 +7,11 @@ import subprocess
 
 import pytest
 from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rosgraph_msgs.msg import Clock
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 
@@ -42,6 +43,8 @@ def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
 ):
     received = graph.subscribe(STREAMS, STREAM_QOS)
     clock = graph.subscribe({"/clock": Clock})["/clock"]
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
+                                  DIAGNOSTICS_QOS)["/diagnostics"]
     scenario = short_scenario(DURATION_S)
     sim = start_process(sim_argv(scenario, real_time_factor), "sim_node")
     expected = int(DURATION_S * RATE_HZ) + 1
@@ -55,6 +58,10 @@ def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
         assert len(stamps) == expected, topic
         assert stamps == pytest.approx([k / RATE_HZ for k in range(expected)], abs=1e-9), topic
     assert clock and stamp_seconds(clock[-1].clock) == pytest.approx(DURATION_S)
+    health_stamps = [stamp_seconds(array.header.stamp) for array in diagnostics
+                     if any(status.name == "/sim_node" for status in array.status)]
+    print(f"/diagnostics of sim_node stamped at {health_stamps} s")
+    assert health_stamps and all(0.0 <= t <= DURATION_S for t in health_stamps)  # sim time
     seeded = received["/faults/seeded"][-1]
     assert list(seeded.names)[:4] == [
         "right_wing_lift_loss",

@@ -34,6 +34,7 @@ from rclpy.signals import SignalHandlerOptions
 
 from uav_common.health import CPU_KEY, hardware_id
 from uav_common.package_data import default_parameters
+from uav_common.ros.messages import stamp
 from uav_common.ros.parameter_files import wildcard_only_names
 
 # Sensor-rate streams and estimates: reliable and keep-all, so that a fast simulation loses
@@ -47,12 +48,12 @@ STREAM_QOS = QoSProfile(
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSTICS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
-OK, WARN, ERROR, STALE = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR,
-                          DiagnosticStatus.STALE)
-# Wall time without a status update after which an input-driven node says STALE: its
-# inputs stopped (they arrive at 2-20 Hz of sim time, and the graph runs at or above real
-# time).
-STALE_AFTER_S = 5.0
+# A node's own levels. STALE is not among them: by diagnostic_msgs' convention it is the
+# aggregator's verdict on a node that has gone silent; a node without input says WARN.
+OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+# Wall time without a status update after which an input-driven node warns that its inputs
+# stopped (they arrive at 2-20 Hz of sim time, and the graph runs at or above real time).
+SILENT_INPUTS_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -232,14 +233,17 @@ class Diagnostics:
     beside the node's own values, its process's CPU time so far (CPU_KEY): what the node
     costs, whatever else shares the cores.
 
-    Wall time, not simulation time: health is for the people and tools watching the run.
-    A node driven by inputs (stale_after_s given) says STALE, with its last status's values,
-    once it has had no update for that long. A node may add statuses of its own parts
-    (update_part: `<node>/<part>`, e.g. mhe_node's model_fit), published with its own.
+    Published every period_s of wall time (health is for the people and tools watching the
+    run), stamped in the node's time: simulation time under use_sim_time, and a clock
+    source's own time (clock_s: what it publishes on /clock [s]). A node driven by inputs
+    (silent_after_s given) says at least WARN, with its last status's values, once it has had
+    no update for that long. A node may add statuses of its own parts (update_part:
+    `<node>/<part>`, e.g. mhe_node's model_fit), published with its own.
     """
 
     def __init__(self, node: Node, period_s: float = 1.0,
-                 stale_after_s: float | None = STALE_AFTER_S) -> None:
+                 silent_after_s: float | None = SILENT_INPUTS_S,
+                 clock_s: Callable[[], float] | None = None) -> None:
         self._node = node
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", DIAGNOSTICS_QOS)
         self._status = DiagnosticStatus(
@@ -247,7 +251,8 @@ class Diagnostics:
             hardware_id=hardware_id(node.get_namespace()),
         )
         self._parts: dict[str, DiagnosticStatus] = {}
-        self._stale_after_s = stale_after_s
+        self._silent_after_s = silent_after_s
+        self._clock_s = clock_s
         self._updated_s = time.monotonic()
         node.create_timer(period_s, self.publish, clock=Clock(clock_type=ClockType.STEADY_TIME))
 
@@ -268,13 +273,15 @@ class Diagnostics:
     def publish(self) -> None:
         status, silent_s = self._status, time.monotonic() - self._updated_s
         level, message = status.level, status.message
-        if self._stale_after_s is not None and silent_s > self._stale_after_s:
-            level, message = STALE, f"no input for {silent_s:.0f} s (last: {status.message})"
+        if self._silent_after_s is not None and silent_s > self._silent_after_s:
+            level = max(level, WARN)  # an ERROR stays one
+            message = f"no input for {silent_s:.0f} s (last: {status.message})"
         published = DiagnosticStatus(
             level=level, name=status.name, hardware_id=status.hardware_id, message=message,
             values=[*status.values, KeyValue(key=CPU_KEY, value=f"{time.process_time():.3f}")])
         array = DiagnosticArray(status=[published, *self._parts.values()])
-        array.header.stamp = self._node.get_clock().now().to_msg()
+        array.header.stamp = (self._node.get_clock().now().to_msg() if self._clock_s is None
+                              else stamp(self._clock_s()))
         self._publisher.publish(array)
 
     def publish_last(self, timeout_s: float = 1.0) -> None:

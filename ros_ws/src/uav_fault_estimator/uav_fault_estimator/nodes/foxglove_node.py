@@ -46,7 +46,7 @@ class FoxgloveNode(Node):
             raise ValueError(f"cannot serve on {host}:{port}: {error}") from None
         self.get_logger().info(f"serving the graph's topics on {self.live_view.url}")
         # never stale: a graph with nothing to show is no fault of the viewer
-        self.diagnostics = Diagnostics(self, stale_after_s=None)
+        self.diagnostics = Diagnostics(self, silent_after_s=None)
         self.create_timer(REPORT_PERIOD_S, self.report,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.topics = RawTopics(self, self.parameters["discovery_period_s"], self.add_topic,

@@ -86,8 +86,10 @@ class LogReplayNode(Node):
                                                     STREAM_QOS))
         self.paced = PacedPublishers(self, publishers)
         self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
-        self.diagnostics = Diagnostics(self, stale_after_s=None)  # a source: no inputs
         times_s = self.replay.inputs.times_s
+        self.clock_s = float(times_s[0])  # the log's time last published on /clock [s]
+        # a source: no inputs; stamped with the log's time it publishes
+        self.diagnostics = Diagnostics(self, silent_after_s=None, clock_s=lambda: self.clock_s)
         self.get_logger().info(
             f"log {self.replay.source}: {times_s.size} samples every {p['sample_period_s']:g} s "
             f"from {times_s[0]:g} to {times_s[-1]:g} s, real-time factor "
@@ -106,6 +108,7 @@ class LogReplayNode(Node):
         for publisher, message in zip(self.paced.publishers, messages, strict=True):
             publisher.publish(message)
         self.clock_publisher.publish(Clock(clock=stamp(time_s)))
+        self.clock_s = time_s
 
     def replay_log(self) -> None:
         """Publish every row of the grid, paced by the real-time factor, until the log's

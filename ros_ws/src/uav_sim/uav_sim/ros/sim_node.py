@@ -111,7 +111,9 @@ class SimNode(Node):
         self.follows_clock = self.get_parameter("use_sim_time").value
         self.clock_publisher = (None if self.follows_clock else
                                 self.create_publisher(Clock, "/clock", CLOCK_QOS))
-        self.diagnostics = Diagnostics(self, stale_after_s=None)  # a source: no inputs
+        # a source: no inputs; stamped with the simulation time it publishes
+        self.diagnostics = Diagnostics(self, silent_after_s=None,
+                                       clock_s=lambda: self.simulation.time_s)
         self.flown_aircraft = json.dumps(self.scenario.aircraft.differences())  # {}: the model
         self.get_logger().info(
             f"scenario '{self.scenario.name}' from {scenario_path}: {self.scenario.duration_s:g} s "
