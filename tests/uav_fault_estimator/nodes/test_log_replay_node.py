@@ -13,11 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray
 from helpers import simulated_logs
 from helpers.alarms import assert_alarms_are_the_cores
 from helpers.simulated_logs import ALFA, FIXTURE_AIRFRAME
 from uav_common.message_fields import air_data_array, setpoints_array, stamp_seconds
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
@@ -102,6 +103,7 @@ def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
     topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/air_data": AirData,
                               "/state": AircraftState}, STREAM_QOS)
     alarms, air_data = topics["/faults/alarm"], topics["/air_data"]
+    health = graph.subscribe({"/diagnostics": DiagnosticArray}, DIAGNOSTICS_QOS)["/diagnostics"]
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
     assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
     replay = start_process(replay_argv(log, FIXTURE_AIRFRAME,
@@ -130,6 +132,10 @@ def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
           f"{stamp_seconds(combined[0].header.stamp) if combined else float('nan'):.1f} s "
           f"(fault at {FAULT_START_S - start_s:g} s of log time)")
     assert combined and stamp_seconds(combined[0].header.stamp) >= FAULT_START_S - start_s
+    # the replay's health stamped in the log's time, as its /clock
+    replay_stamps = [stamp_seconds(array.header.stamp) for array in health
+                     if any(status.name == "/log_replay_node" for status in array.status)]
+    assert replay_stamps and all(0.0 <= t <= inputs.times_s[-1] + 1e-6 for t in replay_stamps)
 
 
 @pytest.mark.slow

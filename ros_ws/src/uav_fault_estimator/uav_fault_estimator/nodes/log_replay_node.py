@@ -127,6 +127,7 @@ class LogReplayNode(Node):
         self.get_logger().info(
             f"log {self.replay.source} replayed to {times_s[-1]:g} s in "
             f"{time.monotonic() - started:.1f} s of wall time")
+        self.diagnostics.publish_last()  # the replay's last status, before the node ends
 
     def change_pace(self, changes: dict[str, Any]) -> None:
         """A new real-time factor, counted from the next sample on."""
