@@ -121,17 +121,16 @@ class MpcGuidance:
         # turn onto the next leg a turn radius ahead of its corner
         self.vector_field.switch_ahead_m = self.turn_radius_m(speed_mps)
         leg = self.vector_field.leg
-        fallback = self.vector_field.roll_command(position_ne_m, ground_velocity_ne_mps)
+        state = self.leg_state(position_ne_m, ground_velocity_ne_mps)  # the leg switched here
         self.since_plan_s += dt_s
         # a new leg is a new problem: planned at once, not up to sample_s late
         if self.since_plan_s >= self.settings.sample_s - 1e-9 or self.vector_field.leg != leg:
             self.since_plan_s = 0.0
-            solved = self.replan(self.leg_state(position_ne_m, ground_velocity_ne_mps),
-                                 speed_mps)
-            if not solved:
+            if not self.replan(state, speed_mps):
                 self.fallbacks += 1
                 self.plan = None
         if self.plan is None:  # this sample flies the vector field
+            fallback = self.vector_field.roll_command(position_ne_m, ground_velocity_ne_mps)
             self.command_radps = fallback * GRAVITY_MPS2 / speed_mps  # its turn, as a rate
             return fallback
         return math.atan(speed_mps * self.command_radps / GRAVITY_MPS2)
@@ -143,7 +142,7 @@ class MpcGuidance:
     def leg_state(self, position_ne_m: np.ndarray,
                   ground_velocity_ne_mps: np.ndarray) -> np.ndarray:
         """(e, psi): cross-track error [m] and course error [rad] about the current leg
-        (the vector field's legs)."""
+        (the vector field's legs, moved to the next one when it is time)."""
         cross_track_m, leg_course = self.vector_field.leg_errors(position_ne_m)
         course = math.atan2(ground_velocity_ne_mps[1], ground_velocity_ne_mps[0])
         return np.array([cross_track_m, wrap_angle(course - leg_course)])
