@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Starts the nodes live (real time) for interactive use: sim_node, residual_node, mhe_node
-# and detector_node (and foxglove_node with --foxglove), each with `ros2 run` in a process
-# group of its own, their output in one folder. Several --scenario options fly several
+# Starts the nodes live (real time) for interactive use: sim_node, residual_node, mhe_node,
+# detector_node and standard_topics_node (and foxglove_node with --foxglove), each with
+# `ros2 run` in a process group of its own, their output in one folder. Several --scenario options fly several
 # aircraft in the one domain: vehicle k under /uavk with nodes of its own, on the first
 # simulator's /clock (the others follow it).
 # Ctrl-C (or SIGTERM) stops them all: SIGINT to each group, SIGKILL to what remains after
@@ -98,6 +98,7 @@ export ROS_LOG_DIR="$logs"
 
 declare -A packages=([sim_node]=uav_sim [residual_node]=uav_fault_estimator
                      [mhe_node]=uav_fault_estimator [detector_node]=uav_fault_estimator
+                     [standard_topics_node]=uav_fault_estimator
                      [foxglove_node]=uav_fault_estimator)
 declare -A pids=()        # by node key: <vehicle>/<node>, or <node> alone
 declare -A simulators=()  # the keys of the sim_nodes still flying
@@ -183,7 +184,7 @@ trap 'stop_all' EXIT
 echo "bringup.sh: ROS domain $ROS_DOMAIN_ID${ns:+, namespace $ns}; logs in $logs/<node>.log"
 # the first vehicle's simulator last: the followers wait for the clock it starts
 for ((index = ${#vehicles[@]} - 1; index >= 0; index--)); do
-    for name in residual_node mhe_node detector_node sim_node; do
+    for name in residual_node mhe_node detector_node standard_topics_node sim_node; do
         start_node "$name" "$index"
     done
 done

@@ -100,10 +100,13 @@ build_workspace() {
         cd "$workspace"
         # shellcheck disable=SC1091
         source "$venv/bin/activate"
-        if ! use_system_ros; then
+        local skip=()
+        if use_system_ros; then
+            skip=(--packages-skip tf2_msgs)  # a real Jazzy has its own: never shadow it
+        else
             export CMAKE_PREFIX_PATH="$venv" AMENT_PREFIX_PATH="$venv"
         fi
-        colcon build --event-handlers console_cohesion- summary+ \
+        colcon build --event-handlers console_cohesion- summary+ "${skip[@]}" \
             --cmake-args -DPython3_EXECUTABLE="$venv/bin/python" -DBUILD_TESTING=OFF
     ) || die "colcon build failed: see the output above and ros_ws/log/latest_build"
     echo "$stamp" >"$workspace/install/.uav_stamp"

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 NODE_NAMES = ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node",
-              "foxglove_node", "log_replay_node")
+              "foxglove_node", "log_replay_node", "standard_topics_node")
 TCP_LISTEN = "0A"  # the state column of /proc/net/tcp for a listening socket
 
 

@@ -32,6 +32,7 @@ setup(
             f"detector_node = {PACKAGE}.nodes.detector_node:main",
             f"foxglove_node = {PACKAGE}.nodes.foxglove_node:main",
             f"log_replay_node = {PACKAGE}.nodes.log_replay_node:main",
+            f"standard_topics_node = {PACKAGE}.nodes.standard_topics_node:main",
         ],
     },
 )

@@ -10,6 +10,7 @@ import subprocess
 import pytest
 from helpers.process_table import NODE_NAMES, kill_all, processes
 from helpers.repo import SCRIPTS
+from tf2_msgs.msg import TFMessage
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import wait_until
@@ -42,7 +43,8 @@ def test_bringup_runs_the_nodes_and_ctrl_c_stops_them_all(
         output = bringup.output()
         assert str(logs) in output and "ros2 topic echo /uav2/faults/estimate" in output
         assert {path.name for path in logs.glob("*_node.log")} == {
-            "sim_node.log", "residual_node.log", "mhe_node.log", "detector_node.log"}
+            "sim_node.log", "residual_node.log", "mhe_node.log", "detector_node.log",
+            "standard_topics_node.log"}
 
         os.kill(bringup.pid, signal.SIGINT)  # the script only, not its group
         assert bringup.wait(15) == 130, bringup.output()
@@ -59,6 +61,7 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
     logs = tmp_path / "logs"
     topics = {f"/uav{k}/faults/estimate": FaultEstimate for k in (1, 2)}
     estimates = graph.subscribe(topics, STREAM_QOS)
+    transforms = graph.subscribe({"/tf": TFMessage}, STREAM_QOS)["/tf"]
     # the leading simulator at 10 times real time; each simulator starts once its vehicle's
     # residual_node and detector_node take its state (a live bringup does not wait: the
     # first samples of a 1 s flight would go to discovery)
@@ -79,9 +82,13 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
     counts = [len(received) for received in estimates.values()]
     print("estimates received:", counts, "last stamps:", ends)
     assert ends == [10.0, 10.0] and min(counts) >= 15
+    # both aircraft in the one map, each its own base_link
+    assert {(t.header.frame_id, t.child_frame_id) for m in transforms for t in m.transforms} \
+        == {("map", "uav1/base_link"), ("map", "uav2/base_link")}
     assert {str(path.relative_to(logs)) for path in logs.glob("*/*_node.log")} == {
         f"uav{k}/{name}.log" for k in (1, 2)
-        for name in ("sim_node", "residual_node", "mhe_node", "detector_node")}
+        for name in ("sim_node", "residual_node", "mhe_node", "detector_node",
+                     "standard_topics_node")}
     assert "following /clock" in (logs / "uav2/sim_node.log").read_text()
     assert "real-time factor 10" in (logs / "uav1/sim_node.log").read_text()
     refused = start_process([str(BRINGUP), "--ns", "/a", "--scenario", scenarios[0],
