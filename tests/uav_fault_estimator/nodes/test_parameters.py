@@ -47,7 +47,7 @@ MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
              "estimate_wind_errors, fault_model_coefficients, fault_model_scales_pct, "
              "fault_models, fault_names, handover_variances_pct2, horizon, lower_bounds_pct, "
              "model_fit_threshold_sigmas, model_fit_window_s, "
-             "noise_calibration_file, noise_variance_factor, prior_pct, solver_eps_abs, "
+             "noise_calibration_file, noise_variance_factor, prior_pct, qos, solver_eps_abs, "
              "solver_max_iter, solver_method, state_file, update_budget_ms, upper_bounds_pct, "
              "wind_error_handover_variance_m2ps2, wind_error_sigma_mps")
 

@@ -29,7 +29,13 @@ from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+    qos_profile_sensor_data,
+)
 from rclpy.signals import SignalHandlerOptions
 
 from uav_common.health import CPU_KEY, hardware_id
@@ -37,13 +43,17 @@ from uav_common.package_data import default_parameters
 from uav_common.ros.messages import stamp
 from uav_common.ros.parameter_files import wildcard_only_names
 
-# Sensor-rate streams and estimates: reliable and keep-all, so that a fast simulation loses
-# nothing while subscribers catch up.
+# Sensor-rate streams and estimates, by each node's `qos` parameter. "reliable" (the
+# default): keep-all, so that a fast simulation loses nothing while subscribers catch up;
+# a slow subscriber holds its publisher back. "sensor_data": ROS's profile (best effort, the
+# newest 5), so that no subscriber holds a publisher back; messages may be lost. A reliable
+# subscription does not match a best-effort publisher (DDS): choose it on every node.
 STREAM_QOS = QoSProfile(
     history=HistoryPolicy.KEEP_ALL,
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.VOLATILE,
 )
+STREAM_QOS_PROFILES = {"reliable": STREAM_QOS, "sensor_data": qos_profile_sensor_data}
 # /clock: only the newest time matters.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSTICS_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -59,17 +69,27 @@ SILENT_INPUTS_S = 5.0
 @dataclass(frozen=True)
 class ParameterSpec:
     """What a node says about one of its parameters: its description; for numbers, the
-    closed range [low, high] its values (each element of an array) must lie in; and whether
-    the node applies a change at run time (live) or reads it once, at start (read-only). The
-    default lives in the package's config YAML alone, and its type is the default's type."""
+    closed range [low, high] its values (each element of an array) must lie in; for a
+    string, the choices it must be one of; and whether the node applies a change at run
+    time (live) or reads it once, at start (read-only). The default lives in the package's
+    config YAML alone, and its type is the default's type."""
 
     description: str
     low: float | None = None
     high: float | None = None
     live: bool = False
+    choices: tuple[str, ...] = ()
 
     def range_text(self) -> str:
         return "" if self.low is None or self.high is None else f"[{self.low:g}, {self.high:g}]"
+
+
+# Every stream node's `qos` parameter (STREAM_QOS_PROFILES).
+QOS_PARAMETER = ParameterSpec(
+    "QoS of the node's sensor-rate streams: reliable (keep-all, nothing lost, a slow "
+    "subscriber holds the publisher back) or sensor_data (best effort, newest 5: messages may "
+    "be lost); a reliable subscription does not hear a sensor_data publisher",
+    choices=tuple(STREAM_QOS_PROFILES))
 
 
 class ParameterError(ValueError):
@@ -117,6 +137,9 @@ def checked_value(name: str, value: Any, kind: Parameter.Type, spec: ParameterSp
         if bad:
             raise ParameterError(f"parameter {name}: {bad[0]!r} is out of range; it must be "
                                  f"{_expected(kind, spec)}")
+    if spec.choices and value not in spec.choices:
+        raise ParameterError(f"parameter {name}: {value!r} is not a choice; it must be one of "
+                             f"{', '.join(spec.choices)}")
     return value
 
 
@@ -134,6 +157,8 @@ def _descriptor(kind: Parameter.Type, spec: ParameterSpec) -> ParameterDescripto
                 IntegerRange(from_value=int(spec.low), to_value=int(spec.high), step=1)]
         elif kind in _NUMBER_ARRAYS:
             descriptor.additional_constraints = f"each value in {spec.range_text()}"
+    if spec.choices:
+        descriptor.additional_constraints = f"one of {', '.join(spec.choices)}"
     return descriptor
 
 

@@ -11,6 +11,9 @@ import rclpy
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.publisher import Publisher
+from rclpy.qos import ReliabilityPolicy
+
+from uav_common.ros.node_tools import ParameterError
 
 ACK_TIMEOUT_S = 10.0
 ACK_POLL_S = 0.1  # wall time per wait for acknowledgements, between checks for SIGINT
@@ -24,16 +27,26 @@ ACK_EVERY_SAMPLES = 40
 
 
 class PacedPublishers:
-    """The source node's stream publishers (STREAM_QOS: reliable, keep-all), the first of
-    them the one whose subscriptions wait_for_subscribers counts, and the pacing of what
-    they publish in source time [s] (simulation or log time) against wall time."""
+    """The source node's stream publishers, the first of them the one whose subscriptions
+    wait_for_subscribers counts, and the pacing of what they publish in source time [s]
+    (simulation or log time) against wall time. Pacing by acknowledgement (factor 0) needs
+    reliable publishers: best-effort ones are never acknowledged (check_factor)."""
 
     def __init__(self, node: Node, publishers: Sequence[Publisher]) -> None:
         self.node = node
         self.publishers = list(publishers)
+        self.acknowledged = all(publisher.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+                                for publisher in self.publishers)
         # (wall time [s, monotonic], source time [s]) that the pacing counts from; None:
         # from the next sample on
         self.origin: tuple[float, float] | None = None
+
+    def check_factor(self, real_time_factor: float) -> None:
+        """ParameterError (one line) for a factor these publishers cannot be paced at."""
+        if real_time_factor == 0 and not self.acknowledged:
+            raise ParameterError(
+                "real_time_factor 0 (as fast as the subscribers acknowledge) needs qos "
+                "reliable: best-effort streams are never acknowledged")
 
     def wait_for_subscribers(self, wanted: int) -> None:
         """Wait for `wanted` subscriptions of the first publisher, then for discovery to

@@ -25,7 +25,8 @@ from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_tools import (
     ERROR,
     OK,
-    STREAM_QOS,
+    QOS_PARAMETER,
+    STREAM_QOS_PROFILES,
     WARN,
     Diagnostics,
     ParameterSpec,
@@ -63,6 +64,7 @@ PARAMETERS = {
     "false_alarm_probability": ParameterSpec(
         "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds",
         1e-9, 0.5, live=True),
+    "qos": QOS_PARAMETER,
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
@@ -83,9 +85,10 @@ class DetectorNode(Node):
         calibration = load_calibration(p["calibration_file"], p["window"],
                                        p["forgetting_factor"], p["airframe"])
         self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
-        self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", STREAM_QOS)
+        qos = STREAM_QOS_PROFILES[p["qos"]]
+        self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", qos)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,
-                                      "generators reset to the calibration",
+                                      "generators reset to the calibration", qos,
                                       optional=OPTIONAL_STREAMS)
         self.diagnostics = Diagnostics(self)
         self.counts = {"published": 0, "combined_alarms": 0}

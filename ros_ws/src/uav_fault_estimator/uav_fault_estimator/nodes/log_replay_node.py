@@ -3,7 +3,7 @@ runs unchanged on a real flight.
 
 Reads the log once (flight_logs.replay: a PX4 ULog, a ROS 1 or 2 bag, a folder of per-topic
 CSVs; the actuator outputs mapped to surfaces by the airframe file), resampled onto the
-detector's grid, and publishes, stamped with the grid's times (relative names, STREAM_QOS):
+detector's grid, and publishes, stamped with the grid's times (relative names, the `qos` chosen):
 `state` (AircraftState: the log's body rates and attitude, the channels no log carries
 NaN), `controls` (ControlInputs: surfaces and throttle), `air_data` (AirData: the log's
 airspeed, the angles NaN; only when the log has airspeed), `/clock` (the log's time, for
@@ -32,7 +32,8 @@ from uav_common.ros.messages import (
 from uav_common.ros.node_tools import (
     CLOCK_QOS,
     OK,
-    STREAM_QOS,
+    QOS_PARAMETER,
+    STREAM_QOS_PROFILES,
     WARN,
     Diagnostics,
     ParameterSpec,
@@ -59,6 +60,7 @@ PARAMETERS = {
         live=True),
     "wait_for_subscribers": ParameterSpec(
         "start once state has this many subscriptions and discovery settled", 0, 100),
+    "qos": QOS_PARAMETER,
 }
 
 
@@ -77,14 +79,16 @@ class LogReplayNode(Node):
                                   p["sample_period_s"])
         for line in dict.fromkeys(self.replay.inputs.warnings):  # each once, in order
             self.get_logger().warning(line)
-        publishers = [self.create_publisher(AircraftState, "state", STREAM_QOS),
-                      self.create_publisher(ControlInputs, "controls", STREAM_QOS)]
+        qos = STREAM_QOS_PROFILES[p["qos"]]
+        publishers = [self.create_publisher(AircraftState, "state", qos),
+                      self.create_publisher(ControlInputs, "controls", qos)]
         if self.replay.air_data is not None:
-            publishers.append(self.create_publisher(AirData, "air_data", STREAM_QOS))
+            publishers.append(self.create_publisher(AirData, "air_data", qos))
         if self.replay.setpoints is not None:
             publishers.append(self.create_publisher(AutopilotSetpoints, "autopilot_setpoints",
-                                                    STREAM_QOS))
+                                                    qos))
         self.paced = PacedPublishers(self, publishers)
+        self.paced.check_factor(p["real_time_factor"])
         self.clock_publisher = self.create_publisher(Clock, "/clock", CLOCK_QOS)
         times_s = self.replay.inputs.times_s
         self.clock_s = float(times_s[0])  # the log's time last published on /clock [s]
@@ -131,6 +135,7 @@ class LogReplayNode(Node):
 
     def change_pace(self, changes: dict[str, Any]) -> None:
         """A new real-time factor, counted from the next sample on."""
+        self.paced.check_factor(changes["real_time_factor"])
         self.paced.restart()
         self.get_logger().info(f"real-time factor {changes['real_time_factor']:g}")
 

@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
+from rclpy.qos import QoSProfile
 from uav_common.message_fields import stamp_nanoseconds
-from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros.paced_publishing import ACK_EVERY_SAMPLES
 from uav_sim.envelope import RateGate, gate
 
@@ -46,7 +46,7 @@ def guarded(node: Node, stream: GuardedStream, topic: str, stamp_ns: int, payloa
 
 
 class MatchedStreams:
-    """Subscribes each topic (reliable, keep-all) in the order given: sim_node's
+    """Subscribes each topic (with the node's stream qos) in the order given: sim_node's
     wait_for_subscribers counts `state` subscriptions, so list `state` last. Complete sets
     go to on_sample(time_s, arrays by topic) in stamp order, with the optional topics'
     arrays where they came (waited for, for up to StampMatcher.optional_wait newer sets,
@@ -60,7 +60,7 @@ class MatchedStreams:
 
     def __init__(self, node: Node, streams: Streams,
                  on_sample: Callable[[float, dict[str, Any]], None],
-                 on_restart: Callable[[], None], restart_note: str,
+                 on_restart: Callable[[], None], restart_note: str, qos: QoSProfile,
                  optional: Streams | None = None) -> None:
         self.node = node
         optional = optional or {}
@@ -81,7 +81,7 @@ class MatchedStreams:
         for topic, (message_type, *_) in {**optional, **streams}.items():
             node.create_subscription(
                 message_type, topic, lambda message, topic=topic: self.receive(topic, message),
-                STREAM_QOS)
+                qos)
 
     def plausible(self, topic: str, message: Any) -> np.ndarray:
         """The message as an array, values outside the aircraft's envelope or changed faster

@@ -20,7 +20,8 @@ from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_tools import (
     ERROR,
     OK,
-    STREAM_QOS,
+    QOS_PARAMETER,
+    STREAM_QOS_PROFILES,
     WARN,
     Diagnostics,
     ParameterError,
@@ -113,6 +114,7 @@ PARAMETERS = {
     "state_file": ParameterSpec(
         "file for the last estimate: a restart within the flight (a first residual later "
         "than the saved one) starts from it; empty: none"),
+    "qos": QOS_PARAMETER,
 }
 RECENT_SOLVES = 200  # solve times kept for the median and p99 on /diagnostics
 
@@ -132,8 +134,9 @@ class MheNode(Node):
         self.names = list(self.parameters["fault_names"])  # published
         self.estimator = MovingHorizonEstimator(self.config)
         self.estimated = self.estimator.column_names  # faults, then any nuisance parameters
-        self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", STREAM_QOS)
-        self.create_subscription(Residuals, "residuals", self.on_residuals, STREAM_QOS)
+        qos = STREAM_QOS_PROFILES[self.parameters["qos"]]
+        self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", qos)
+        self.create_subscription(Residuals, "residuals", self.on_residuals, qos)
         self.diagnostics = Diagnostics(self)
         self.model_fit = ModelFit(self.noise.calibration, self.parameters["model_fit_window_s"],
                                   self.parameters["model_fit_threshold_sigmas"], SETTLE_S)

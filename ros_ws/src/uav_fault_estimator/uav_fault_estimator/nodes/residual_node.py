@@ -19,7 +19,8 @@ from uav_common.message_fields import air_data_array, controls_array, state_arra
 from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_tools import (
     OK,
-    STREAM_QOS,
+    QOS_PARAMETER,
+    STREAM_QOS_PROFILES,
     WARN,
     Diagnostics,
     ParameterSpec,
@@ -66,6 +67,7 @@ PARAMETERS = {
         "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 10.0),
     "model_calibration_file": ParameterSpec(
         "model calibration YAML (scripts/calibrate_model.py); empty: aerosonde.xml as shipped"),
+    "qos": QOS_PARAMETER,
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
@@ -89,9 +91,10 @@ class ResidualNode(Node):
         self.model = calibration or SHIPPED_MODEL
         self.generator = residual_generator(
             p, load_model_calibration(calibration).aircraft if calibration else NOMINAL)
-        self.publisher = self.create_publisher(Residuals, "residuals", STREAM_QOS)
+        qos = STREAM_QOS_PROFILES[p["qos"]]
+        self.publisher = self.create_publisher(Residuals, "residuals", qos)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset",
-                                      OPTIONAL_STREAMS)
+                                      qos, OPTIONAL_STREAMS)
         self.diagnostics = Diagnostics(self)
         self.next_publish_s: float | None = None
         self.counts = {"samples": 0, "published": 0, "rejected_samples": 0,

@@ -32,7 +32,8 @@ from tf2_msgs.msg import TFMessage
 from uav_common.message_fields import stamp_nanoseconds, state_array
 from uav_common.ros.node_tools import (
     OK,
-    STREAM_QOS,
+    QOS_PARAMETER,
+    STREAM_QOS_PROFILES,
     WARN,
     Diagnostics,
     ParameterSpec,
@@ -54,6 +55,7 @@ PARAMETERS = {
         "[m]"),
     "track_period_s": ParameterSpec("sim time between the track's poses [s]", 0.05, 60.0),
     "track_poses": ParameterSpec("poses the track keeps, the newest", 2, 100000),
+    "qos": QOS_PARAMETER,
 }
 MAP_FRAME, BODY_FRAME = "map", "base_link"  # REP 105's names
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)  # tf2's own for /tf
@@ -138,21 +140,22 @@ class StandardTopicsNode(Node):
         self.body_frame = f"{namespace}/{BODY_FRAME}" if namespace else BODY_FRAME
         self.track_period_s, self.track_poses = p["track_period_s"], p["track_poses"]
         self.track = Path(header=Header(frame_id=MAP_FRAME))
+        qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publishers_ = {
             "tf": self.create_publisher(TFMessage, "/tf", TF_QOS),
-            "odom": self.create_publisher(Odometry, "odom", STREAM_QOS),
-            "imu": self.create_publisher(Imu, "imu", STREAM_QOS),
-            "fix": self.create_publisher(NavSatFix, "fix", STREAM_QOS),
+            "odom": self.create_publisher(Odometry, "odom", qos),
+            "imu": self.create_publisher(Imu, "imu", qos),
+            "fix": self.create_publisher(NavSatFix, "fix", qos),
             "track": self.create_publisher(Path, "track", LATEST_QOS),
         }
         self.fault_publishers: dict[str, object] = {}
         self.stream, self.rate_gate = GuardedStream(), state_rate_gate()
         self.counts = {"states": 0, "without_pose": 0, "implausible_values": 0, "restarts": 0}
-        self.create_subscription(AircraftState, "state", self.on_state, STREAM_QOS)
+        self.create_subscription(AircraftState, "state", self.on_state, qos)
         self.create_subscription(FaultEstimate, "faults/estimate",
-                                 lambda m: self.on_faults("estimate", m), STREAM_QOS)
+                                 lambda m: self.on_faults("estimate", m), qos)
         self.create_subscription(FaultVector, "faults/seeded",
-                                 lambda m: self.on_faults("seeded", m), STREAM_QOS)
+                                 lambda m: self.on_faults("seeded", m), qos)
         self.diagnostics = Diagnostics(self)
 
     def on_state(self, message: AircraftState) -> None:

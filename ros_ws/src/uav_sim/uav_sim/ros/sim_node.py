@@ -1,6 +1,6 @@
 """sim_node: flies a scenario in the core Simulation and publishes it at the sensor rate.
 
-Publishes (relative names, STREAM_QOS): `state` (AircraftState), `controls`
+Publishes (relative names, the `qos` chosen): `state` (AircraftState), `controls`
 (ControlInputs), `air_data` (AirData; only when the scenario's aircraft carries air data),
 `wind/filtered` (WindEstimate), `autopilot_setpoints` (AutopilotSetpoints: its autopilot's
 commanded roll and pitch); the simulation's truth `faults/seeded` (FaultVector) and
@@ -41,7 +41,8 @@ from uav_common.ros.messages import (
 from uav_common.ros.node_tools import (
     CLOCK_QOS,
     OK,
-    STREAM_QOS,
+    QOS_PARAMETER,
+    STREAM_QOS_PROFILES,
     WARN,
     Diagnostics,
     ParameterSpec,
@@ -78,6 +79,7 @@ PARAMETERS = {
         "the node gives up [s, wall time]", 0.1, 3600.0),
     "wait_for_subscribers": ParameterSpec(
         "start once state has this many subscriptions and discovery settled", 0, 100),
+    "qos": QOS_PARAMETER,
 }
 CLOCK_POLL_S = 0.05  # wall time per wait for /clock when following it
 
@@ -94,21 +96,24 @@ class SimNode(Node):
         self.simulation = Simulation(
             self.scenario, sensor_rate_hz=self.parameters["sensor_rate_hz"]
         )
+        qos = STREAM_QOS_PROFILES[self.parameters["qos"]]
         self.stream_publishers = [
-            self.create_publisher(AircraftState, "state", STREAM_QOS),
-            self.create_publisher(ControlInputs, "controls", STREAM_QOS),
-            self.create_publisher(WindEstimate, "wind/filtered", STREAM_QOS),
-            self.create_publisher(FaultVector, "faults/seeded", STREAM_QOS),
-            self.create_publisher(Vector3Stamped, "wind/true", STREAM_QOS),
-            self.create_publisher(AutopilotSetpoints, "autopilot_setpoints", STREAM_QOS),
+            self.create_publisher(AircraftState, "state", qos),
+            self.create_publisher(ControlInputs, "controls", qos),
+            self.create_publisher(WindEstimate, "wind/filtered", qos),
+            self.create_publisher(FaultVector, "faults/seeded", qos),
+            self.create_publisher(Vector3Stamped, "wind/true", qos),
+            self.create_publisher(AutopilotSetpoints, "autopilot_setpoints", qos),
         ]
         self.air_data_publisher = None
         if self.scenario.sensors.air_data:
-            self.air_data_publisher = self.create_publisher(AirData, "air_data", STREAM_QOS)
+            self.air_data_publisher = self.create_publisher(AirData, "air_data", qos)
             self.stream_publishers.append(self.air_data_publisher)
         self.paced = PacedPublishers(self, self.stream_publishers)
         # one /clock per domain: a simulator on use_sim_time follows it (wait_for_clock)
         self.follows_clock = self.get_parameter("use_sim_time").value
+        if not self.follows_clock:
+            self.paced.check_factor(self.parameters["real_time_factor"])
         self.clock_publisher = (None if self.follows_clock else
                                 self.create_publisher(Clock, "/clock", CLOCK_QOS))
         # a source: no inputs; stamped with the simulation time it publishes
@@ -187,6 +192,7 @@ class SimNode(Node):
 
     def change_pace(self, changes: dict[str, Any]) -> None:
         """A new real-time factor, counted from the next step on."""
+        self.paced.check_factor(changes["real_time_factor"])
         self.paced.restart()
         self.get_logger().info(f"real-time factor {changes['real_time_factor']:g}")
 
