@@ -73,6 +73,12 @@ FAULT_NAMES: tuple[str, ...] = (
 PAPER_FAULT_NAMES: tuple[str, ...] = FAULT_NAMES[:4]
 
 
+def state_indices(*channels: str) -> list[int]:
+    """Where the named channels are in a state array (STATE_CHANNELS order), in the order
+    given."""
+    return [STATE_CHANNELS.index(channel) for channel in channels]
+
+
 def field_name(channel: str, unit: str) -> str:
     """Message field name of a channel: ``<channel>_<unit>``, or the channel alone."""
     return f"{channel}_{unit}" if unit else channel

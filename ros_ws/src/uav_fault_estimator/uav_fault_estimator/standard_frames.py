@@ -25,18 +25,17 @@ from dataclasses import dataclass
 import numpy as np
 import pymap3d
 from scipy.spatial.transform import Rotation
-from uav_common.channels import STATE_CHANNELS
+from uav_common.channels import state_indices
 from uav_sim.frames import ned_to_body
 
 GRAVITY_MPS2 = 9.80665  # standard gravity, down in NED
 ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 FLU_FROM_FRD = np.diag([1.0, -1.0, -1.0])  # its own inverse
 
-_INDEX = {name: index for index, name in enumerate(STATE_CHANNELS)}
-POSITION = [_INDEX[name] for name in ("latitude", "longitude", "altitude")]
-ATTITUDE = [_INDEX[name] for name in ("roll", "pitch", "yaw")]
-VELOCITY_NED = [_INDEX[name] for name in ("velocity_north", "velocity_east", "velocity_down")]
-BODY_RATES = [_INDEX[name] for name in ("roll_rate", "pitch_rate", "yaw_rate")]
+POSITION = state_indices("latitude", "longitude", "altitude")
+ATTITUDE = state_indices("roll", "pitch", "yaw")
+VELOCITY_NED = state_indices("velocity_north", "velocity_east", "velocity_down")
+BODY_RATES = state_indices("roll_rate", "pitch_rate", "yaw_rate")
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from uav_common.channels import STATE_CHANNELS
+from uav_common.channels import STATE_CHANNELS, state_indices
 from uav_sim.filters import LowPass, SettlingLowPass
 from uav_sim.flown_aircraft import NO_BIAS, SensorBias
 from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
@@ -54,11 +54,10 @@ PredictorFactory = Callable[[Mapping[str, float]], Prediction]
 RESIDUAL_CHANNELS = (
     "linear_x", "linear_y", "linear_z", "angular_x", "angular_y", "angular_z",
 )
-_INDEX = {name: index for index, name in enumerate(STATE_CHANNELS)}
-VELOCITY = [_INDEX[name] for name in ("velocity_north", "velocity_east", "velocity_down",
-                                      "roll_rate", "pitch_rate", "yaw_rate")]
-ATTITUDE = [_INDEX[name] for name in ("roll", "pitch", "yaw")]
-FUEL_MASS = _INDEX["fuel_mass"]
+VELOCITY = state_indices("velocity_north", "velocity_east", "velocity_down",
+                         "roll_rate", "pitch_rate", "yaw_rate")
+ATTITUDE = state_indices("roll", "pitch", "yaw")
+[FUEL_MASS] = state_indices("fuel_mass")
 # The fuel gauge's reading is smoothed before the models take it: a full tank's contents are
 # clipped at its capacity, so a gauge's white noise (0.1 kg a sample) makes the models'
 # mean mass too low (measured: lift residual biased by 0.36 of its noise deviation on
