@@ -1,7 +1,10 @@
 """foxglove_node: a Foxglove WebSocket client on loopback sees the graph's topics advertised
 with their ros2msg schemas and receives a published FaultEstimate unchanged (CDR); the
-server listens on 127.0.0.1 alone and stops on SIGINT. Its core, LiveView, refuses a type it
-cannot describe."""
+server listens on 127.0.0.1 alone and stops on SIGINT. The client reads and sets the graph's
+parameters (a live one taken by its node, a read-only one refused, unchanged, with the
+node's reason as a status), hears of changes made with `ros2 param set`, and is sent the
+simulation time; a node that does not answer costs a request no more than the timeout. Its
+core, LiveView, refuses a type it cannot describe and speaks foxglove.sdk.v1 alone."""
 
 from __future__ import annotations
 
@@ -13,21 +16,32 @@ import subprocess
 import time
 
 import pytest
+import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.process_table import listening_tcp
+from helpers.ros2_param import param_get, param_set
 from rclpy.serialization import deserialize_message
 from uav_common.package_data import default_parameters
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
-from uav_fault_estimator.live_view import LiveView
+from uav_fault_estimator.live_view import (
+    SUBPROTOCOL,
+    LiveView,
+    parameter_name,
+    split_parameter_name,
+)
 from uav_fault_estimator.recording.project_bag import project_typestore
 from uav_fault_msgs.msg import FaultEstimate
+from websockets.exceptions import InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
 TOPIC = "/faults/estimate"
-SUBPROTOCOL = "foxglove.sdk.v1"  # the one foxglove-sdk 0.30's server accepts
 MESSAGE_DATA = 0x01  # opcode of a binary server message carrying one message
 MESSAGE_DATA_HEADER = struct.Struct("<BIQ")  # opcode, subscription id, log time [ns]
+TIME = 0x02  # opcode of a binary server message carrying the server's time
+TIME_MESSAGE = struct.Struct("<BQ")  # opcode, time [ns]
+RATE = "/sim_node.real_time_factor"  # live
+SENSOR_RATE = "/sim_node.sensor_rate_hz"  # read-only
 SUBSCRIPTION_ID = 7
 SEPARATOR = "=" * 80  # between a ros2msg definition and each nested type's
 
@@ -60,6 +74,40 @@ def channel_of(client: ClientConnection, topic: str, timeout_s: float) -> dict:
             for channel in message["channels"]:
                 if channel["topic"] == topic:
                     return channel
+
+
+def next_op(client: ClientConnection, ops: str, timeout_s: float) -> dict:
+    """The next text message of one of ops ("a|b") within timeout_s (others, binary ones
+    too, skipped); TimeoutError when none came."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        frame = client.recv(timeout=max(0.0, deadline - time.monotonic()))
+        if isinstance(frame, str) and (message := json.loads(frame))["op"] in ops.split("|"):
+            return message
+
+
+def next_time_ns(client: ClientConnection, timeout_s: float) -> int:
+    """The time [ns] of the next Time message within timeout_s (other frames skipped)."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        frame = client.recv(timeout=max(0.0, deadline - time.monotonic()))
+        if isinstance(frame, bytes) and frame[0] == TIME:
+            return TIME_MESSAGE.unpack_from(frame)[1]
+
+
+def parameters(client: ClientConnection, op: dict,
+               timeout_s: float) -> tuple[dict[str, object], list[str]]:
+    """Send a getParameters or setParameters op (with an id); the values answered by name
+    and the status messages that came before the answer (the server sends those first)."""
+    client.send(json.dumps(op))
+    deadline = time.monotonic() + timeout_s
+    statuses = []
+    while (answer := next_op(client, "parameterValues|status",
+                             deadline - time.monotonic()))["op"] == "status":
+        statuses.append(answer["message"])
+    assert answer.get("id") == op["id"], answer
+    return {parameter["name"]: parameter.get("value")
+            for parameter in answer["parameters"]}, statuses
 
 
 def message_data(client: ClientConnection, timeout_s: float) -> bytes | None:
@@ -154,3 +202,120 @@ def test_loopback_by_default_and_an_unknown_type_is_refused():
     finally:
         view.close()
     view.close()  # twice is harmless
+
+
+@pytest.mark.integration
+@pytest.mark.timeout(120)
+def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
+        short_scenario, start_process):
+    scenario = short_scenario(600.0)
+    sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
+        "-p", f"scenario:={scenario}", "-p", "real_time_factor:=1.0",
+        "-p", "wait_for_subscribers:=0"]), "sim_node")
+    node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
+        "-p", "port:=0", "-p", "use_sim_time:=true"]), "foxglove_node")
+    deadline = time.monotonic() + 30
+    while not listening_tcp(node.pid) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    [(_address, port)] = listening_tcp(node.pid)
+    with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
+                 open_timeout=10) as client:
+        server_info = next_op(client, "serverInfo", timeout_s=10)
+        assert {"parameters", "parametersSubscribe", "time"} <= set(
+            server_info["capabilities"]), server_info
+        # simulation time, not wall time: the 600 s flight has just begun
+        assert 0 < next_time_ns(client, timeout_s=30) < 600e9
+
+        ask = {"op": "getParameters", "parameterNames": [RATE, SENSOR_RATE], "id": "get"}
+        values, _ = parameters(client, ask, timeout_s=10)
+        while values == {} and time.monotonic() < deadline:  # until discovery found sim_node
+            values, _ = parameters(client, ask, timeout_s=10)
+        assert values == {RATE: 1.0, SENSOR_RATE: 20.0}, sim.output()
+        every, _ = parameters(client, {"op": "getParameters", "parameterNames": [],
+                                       "id": "all"}, timeout_s=10)
+        assert every[RATE] == 1.0 and every["/foxglove_node.port"] == 0
+        assert every["/sim_node.scenario"] == str(scenario)
+
+        values, statuses = parameters(client, {"op": "setParameters", "id": "set", "parameters": [
+            {"name": RATE, "value": 4.0, "type": "float64"},
+            {"name": SENSOR_RATE, "value": 10.0, "type": "float64"}]}, timeout_s=10)
+        assert values == {RATE: 4.0, SENSOR_RATE: 20.0}
+        assert statuses == [
+            f"{SENSOR_RATE} refused: Trying to set a read-only parameter: sensor_rate_hz."]
+        assert param_get("/sim_node", "real_time_factor") == "Double value is: 4.0"
+        assert param_get("/sim_node", "sensor_rate_hz") == "Double value is: 20.0"
+        # out of range: refused by the node, unchanged
+        values, statuses = parameters(client, {"op": "setParameters", "id": "too fast",
+                                               "parameters": [{"name": RATE, "value": 5000.0,
+                                                               "type": "float64"}]}, timeout_s=10)
+        assert values == {RATE: 4.0}
+        assert statuses == [f"{RATE} refused: Parameter real_time_factor out of range Min: 0.0, "
+                            "Max: 1000.0, value: 5000.0"]
+
+        # a change made elsewhere reaches a client subscribed to the parameter
+        client.send(json.dumps({"op": "subscribeParameterUpdates", "parameterNames": [RATE]}))
+        time.sleep(0.5)  # the subscription reaches the server
+        assert param_set("/sim_node", "real_time_factor", "2.0") == "Set parameter successful"
+        update = next_op(client, "parameterValues", timeout_s=10)
+        assert update["parameters"] == [{"name": RATE, "type": "float64", "value": 2.0}]
+    assert node.stop() == 0, node.output()
+    assert f"{SENSOR_RATE} refused: Trying to set a read-only parameter" in node.output()
+
+
+@pytest.mark.integration
+@pytest.mark.timeout(60)
+def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_process, graph):
+    timeout_s = 0.5
+    node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
+        "-p", "port:=0", "-p", f"parameter_timeout_s:={timeout_s}"]), "foxglove_node")
+    # parameter services no executor serves: its requests wait for ever
+    silent = rclpy.create_node("silent_node", context=graph.context)
+    try:
+        deadline = time.monotonic() + 30
+        while not listening_tcp(node.pid) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        [(_address, port)] = listening_tcp(node.pid)
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
+                     open_timeout=10) as client:
+            ask = {"op": "getParameters", "parameterNames": [], "id": "all"}
+            values: dict[str, object] = {}
+            while "/foxglove_node.port" not in values and time.monotonic() < deadline:
+                values, _ = parameters(client, ask, timeout_s=10)
+            started = time.monotonic()
+            values, _ = parameters(client, ask, timeout_s=10)
+            took_s = time.monotonic() - started
+        assert values["/foxglove_node.port"] == 0
+        assert not any(name.startswith("/silent_node.") for name in values)
+        # listing waits timeout_s for the silent node; getting asks the others alone
+        assert timeout_s <= took_s < 2 * timeout_s, took_s
+        print(f"a request with a silent node took {took_s:.2f} s")
+    finally:
+        silent.destroy_node()
+    assert node.stop() == 0, node.output()
+    assert "no answer to list_parameters within 0.5 s from /silent_node" in node.output()
+
+
+@pytest.mark.timeout(30)
+def test_foxglove_parameter_names_are_the_node_then_the_parameter():
+    assert parameter_name("/uav1/sim_node", "a.b") == "/uav1/sim_node.a.b"
+    assert split_parameter_name("/uav1/sim_node.a.b") == ("/uav1/sim_node", "a.b")
+    for bad in ("sim_node", "/sim_node", "/sim_node.", "/.x"):
+        with pytest.raises(ValueError, match=r"is not /node\.parameter"):
+            split_parameter_name(bad)
+
+
+@pytest.mark.timeout(30)
+def test_the_server_speaks_foxglove_sdk_v1_alone():
+    view = LiveView(project_typestore(), "127.0.0.1", 0, name="test")
+    try:
+        # the subprotocol Foxglove's older clients and foxglove_bridge speak: refused
+        with pytest.raises(InvalidStatus, match="HTTP 400"):
+            connect(view.url, subprotocols=["foxglove.websocket.v1"], open_timeout=10)
+        with connect(view.url, subprotocols=["foxglove.websocket.v1", SUBPROTOCOL],
+                     open_timeout=10) as client:
+            assert client.subprotocol == SUBPROTOCOL
+            server_info = next_op(client, "serverInfo", timeout_s=10)
+        # no store, no sim time: neither capability
+        assert server_info["capabilities"] == []
+    finally:
+        view.close()

@@ -4,11 +4,11 @@ the node's reason, and the mhe_node weights take a change or say why not."""
 
 from __future__ import annotations
 
-import subprocess
 import time
 
 import numpy as np
 import pytest
+from helpers.ros2_param import param_get, param_set
 from rosgraph_msgs.msg import Clock
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
@@ -18,21 +18,6 @@ from uav_fault_estimator.detection.detector import SelfTuningDetector
 from uav_fault_msgs.msg import FaultAlarm
 
 pytestmark = pytest.mark.integration
-
-
-def param_set(node: str, name: str, value: str) -> str:
-    """What `ros2 param set` prints (stdout and stderr), stripped."""
-    result = subprocess.run(["ros2", "param", "set", node, name, value], capture_output=True,
-                            text=True, timeout=60)
-    assert result.returncode == 0, result.stderr
-    return (result.stdout + result.stderr).strip()
-
-
-def param_get(node: str, name: str) -> str:
-    result = subprocess.run(["ros2", "param", "get", node, name], capture_output=True,
-                            text=True, timeout=60)
-    assert result.returncode == 0, result.stderr
-    return result.stdout.strip()
 
 
 @pytest.mark.slow

@@ -4,17 +4,36 @@ channel per topic, fed serialized (CDR) messages as they arrive, nothing decoded
 Each channel carries its type's full ros2msg definition (the main type, then each nested
 type after a line of 80 '=' and `MSG: pkg/Name`, as MCAP's ros2msg profile has it), made by
 the project's rosbags type store, so Foxglove decodes the project's own messages too.
+
+With a ParameterStore the server has the parameters capability: Foxglove reads and sets the
+graph's parameters by the names foxglove_bridge gives them, the node's fully qualified name,
+'.', the parameter (`/sim_node.real_time_factor`). With sim_time it has the time capability:
+the view broadcasts its clock (broadcast_time), which Foxglove's timeline follows.
+
+The server (foxglove-sdk 0.30) speaks the subprotocol `foxglove.sdk.v1` alone: a client
+offering only `foxglove.websocket.v1` is refused with HTTP 400, and the SDK has no setting
+for it.
 """
 
 from __future__ import annotations
 
 import threading
+from typing import Any, Protocol
 
 import foxglove
-from foxglove.websocket import ChannelView, Client
+from foxglove.websocket import (
+    Capability,
+    ChannelView,
+    Client,
+    Parameter,
+    ServerListener,
+    StatusLevel,
+    WebSocketServer,
+)
 from rosbags.typesys.store import Typestore
 
 ROS2MSG, CDR = "ros2msg", "cdr"  # schema and message encodings of a ROS 2 channel
+SUBPROTOCOL = "foxglove.sdk.v1"  # the one subprotocol foxglove-sdk 0.30's server accepts
 
 
 def ros2msg_schema(typestore: Typestore, message_type: str) -> str:
@@ -26,9 +45,40 @@ def ros2msg_schema(typestore: Typestore, message_type: str) -> str:
     return text
 
 
-class SubscribedClients:
-    """The Foxglove server's listener: which clients are subscribed to at least one channel.
-    The server calls it from its own thread."""
+def parameter_name(node_name: str, parameter: str) -> str:
+    """Foxglove's name of a node's parameter: `/ns/node` and `a.b` give `/ns/node.a.b`."""
+    return f"{node_name}.{parameter}"
+
+
+def split_parameter_name(name: str) -> tuple[str, str]:
+    """(node's fully qualified name, parameter) of a Foxglove parameter name; node names
+    have no '.', so the first '.' after the last '/' ends it. ValueError for a name that is
+    not of that form."""
+    slash = name.rfind("/")
+    dot = name.find(".", slash + 1)
+    if slash < 0 or dot < 0 or dot == slash + 1 or dot == len(name) - 1:
+        raise ValueError(f"'{name}' is not /node.parameter")
+    return name[:dot], name[dot + 1:]
+
+
+class ParameterStore(Protocol):
+    """The graph's parameters by Foxglove name (parameter_name), as plain values (bool, int,
+    float, str, bytes, lists of them; None: not set). Called from the server's thread; each
+    call returns within a bounded time of the store's."""
+
+    def get(self, names: list[str]) -> dict[str, Any]:
+        """The values of names (all parameters of every node for no name); a name without a
+        value (no such node or parameter, a node that did not answer) is left out."""
+
+    def set(self, values: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+        """Ask each owning node to take the values; the values the nodes then hold (refused
+        ones unchanged) and one line per refusal, saying why."""
+
+
+class SubscribedClients(ServerListener):
+    """The Foxglove server's listener: which clients are subscribed to at least one channel
+    (ServerListener's no-ops for the other events). The server calls it from its own
+    thread."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
@@ -51,19 +101,60 @@ class SubscribedClients:
             return len(self._channels)
 
 
+def foxglove_parameters(values: dict[str, Any]) -> list[Parameter]:
+    """Plain values by name as Foxglove parameters (their types follow from the values)."""
+    return [Parameter(name, value=value) for name, value in sorted(values.items())]
+
+
+class ViewListener(SubscribedClients):
+    """SubscribedClients that also answers Foxglove's parameter requests from a store (none:
+    no parameters). A refused set goes to the clients as a warning status."""
+
+    def __init__(self, parameters: ParameterStore | None) -> None:
+        super().__init__()
+        self.parameters = parameters
+        self.server: WebSocketServer | None = None  # set once started: for statuses
+
+    def on_get_parameters(self, client: Client, param_names: list[str],
+                          request_id: str | None = None) -> list[Parameter]:
+        """The values of param_names, all parameters for none."""
+        if self.parameters is None:
+            return []
+        return foxglove_parameters(self.parameters.get(list(param_names)))
+
+    def on_set_parameters(self, client: Client, parameters: list[Parameter],
+                          request_id: str | None = None) -> list[Parameter]:
+        """Each parameter set on its node; the values the nodes hold afterwards."""
+        if self.parameters is None:
+            return []
+        values, refusals = self.parameters.set(
+            {parameter.name: parameter.get_value() for parameter in parameters})
+        for refusal in refusals:
+            if self.server is not None:
+                self.server.publish_status(refusal, StatusLevel.Warning)
+        return foxglove_parameters(values)
+
+
 class LiveView:
     """A running Foxglove WebSocket server on host:port (port 0: one the system chooses);
     topics are added as they appear, messages logged raw. The server, its channels and its
-    clients belong to this view alone (a foxglove Context of its own).
+    clients belong to this view alone (a foxglove Context of its own). parameters: the
+    store Foxglove reads and sets parameters in (None: no parameters capability); sim_time:
+    advertise the time capability, the clients then following broadcast_time.
 
     RuntimeError (foxglove's, naming the cause) when the server cannot listen there."""
 
-    def __init__(self, typestore: Typestore, host: str, port: int, name: str) -> None:
+    def __init__(self, typestore: Typestore, host: str, port: int, name: str,
+                 parameters: ParameterStore | None = None, sim_time: bool = False) -> None:
         self.typestore = typestore
         self.context = foxglove.Context()
-        self.clients = SubscribedClients()
+        self.clients = ViewListener(parameters)
+        capabilities = ([Capability.Parameters] if parameters is not None else []) + (
+            [Capability.Time] if sim_time else [])
         self.server = foxglove.start_server(name=name, host=host, port=port,
-                                            context=self.context, server_listener=self.clients)
+                                            capabilities=capabilities, context=self.context,
+                                            server_listener=self.clients)
+        self.clients.server = self.server
         self.host = host
         self.port = self.server.port
         self.channels: dict[str, foxglove.Channel] = {}
@@ -87,6 +178,14 @@ class LiveView:
         clients subscribed to it."""
         self.channels[topic].log(data, log_time=log_time_ns)
         self.counts[topic] += 1
+
+    def broadcast_time(self, time_ns: int) -> None:
+        """The server's time [ns] to every client (with sim_time: Foxglove's current time)."""
+        self.server.broadcast_time(time_ns)
+
+    def publish_parameters(self, values: dict[str, Any]) -> None:
+        """Changed parameter values by Foxglove name to the clients subscribed to them."""
+        self.server.publish_parameter_values(foxglove_parameters(values))
 
     def close(self) -> None:
         """Stop the server (clients are disconnected) and close the channels. Safe to call

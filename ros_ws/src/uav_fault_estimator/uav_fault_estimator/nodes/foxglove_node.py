@@ -4,6 +4,9 @@ Topics are discovered while the node runs and subscribed raw, as recorder_node d
 (RawTopics: once they have publishers, with the reliability those offer, keep-all); each
 message goes unchanged (CDR) to its channel of a LiveView, stamped with the receive time on
 the node's clock (simulation time when started with use_sim_time, as bringup.sh starts it).
+The graph's parameters are read and set through the nodes' parameter services (RosParameters),
+and changes any tool makes (/parameter_events) go to the clients subscribed to them. Under
+use_sim_time the server's time is the node's clock, broadcast every TIME_PERIOD_S.
 Connect Foxglove to ws://HOST:PORT. Reports on /diagnostics; SIGINT stops the server.
 """
 
@@ -11,13 +14,16 @@ from __future__ import annotations
 
 import sys
 
+from rcl_interfaces.msg import ParameterEvent
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rclpy.qos import qos_profile_parameter_events
 from rclpy.topic_endpoint_info import TopicEndpointInfo
 from uav_common.ros.node_tools import OK, Diagnostics, ParameterSpec, declare_parameters, run_node
 
-from uav_fault_estimator.live_view import LiveView
+from uav_fault_estimator.live_view import LiveView, parameter_name
 from uav_fault_estimator.nodes.raw_topics import RawTopics
+from uav_fault_estimator.nodes.ros_parameters import RosParameters, plain_value
 from uav_fault_estimator.recording.project_bag import project_typestore
 
 PARAMETERS = {
@@ -27,8 +33,13 @@ PARAMETERS = {
                           "chooses, logged)", 0, 65535),
     "discovery_period_s": ParameterSpec(
         "how often new topics are looked for [s, wall time]", 0.01, 60.0),
+    "parameter_timeout_s": ParameterSpec(
+        "longest one round of calls of a Foxglove parameter request waits for the "
+        "nodes' answers [s, wall time]",
+        0.1, 30.0),
 }
 REPORT_PERIOD_S = 1.0  # how often the diagnostics' counters are refreshed [s, wall time]
+TIME_PERIOD_S = 0.05  # how often the server's time is broadcast [s, wall time]: 20 Hz
 
 
 class FoxgloveNode(Node):
@@ -39,12 +50,22 @@ class FoxgloveNode(Node):
         self.parameters = declare_parameters(
             self, "uav_fault_estimator", "foxglove_node.yaml", PARAMETERS)
         host, port = self.parameters["host"], self.parameters["port"]
+        self.ros_parameters = RosParameters(self, self.parameters["parameter_timeout_s"])
+        sim_time = self.get_parameter("use_sim_time").value
         try:
             self.live_view = LiveView(project_typestore(), host, port,
-                                      name=self.get_fully_qualified_name())
+                                      name=self.get_fully_qualified_name(),
+                                      parameters=self.ros_parameters, sim_time=sim_time)
         except RuntimeError as error:  # foxglove's: the address is taken, unknown, ...
+            self.ros_parameters.close()
             raise ValueError(f"cannot serve on {host}:{port}: {error}") from None
-        self.get_logger().info(f"serving the graph's topics on {self.live_view.url}")
+        self.get_logger().info(f"serving the graph's topics and parameters on "
+                               f"{self.live_view.url}")
+        self.create_subscription(ParameterEvent, "/parameter_events", self.parameters_changed,
+                                 qos_profile_parameter_events)
+        if sim_time:  # without it Foxglove's time is the messages' own (receive time)
+            self.create_timer(TIME_PERIOD_S, self.broadcast_time,
+                              clock=Clock(clock_type=ClockType.STEADY_TIME))
         # never stale: a graph with nothing to show is no fault of the viewer
         self.diagnostics = Diagnostics(self, silent_after_s=None)
         self.create_timer(REPORT_PERIOD_S, self.report,
@@ -58,6 +79,18 @@ class FoxgloveNode(Node):
         """A new channel of the live view; ValueError for a type it cannot describe."""
         self.live_view.add_topic(topic, message_type)
 
+    def parameters_changed(self, event: ParameterEvent) -> None:
+        """A node's new and changed parameters to the clients subscribed to them."""
+        self.live_view.publish_parameters({
+            parameter_name(event.node, parameter.name): plain_value(parameter.value)
+            for parameter in [*event.new_parameters, *event.changed_parameters]})
+
+    def broadcast_time(self) -> None:
+        """The node's clock (simulation time) as the server's time, once /clock has run."""
+        now_ns = self.get_clock().now().nanoseconds
+        if now_ns > 0:
+            self.live_view.broadcast_time(now_ns)
+
     def report(self) -> None:
         """The diagnostics status: topics served, messages forwarded, subscribed clients."""
         self.diagnostics.update(OK, f"serving {len(self.live_view.channels)} topics on "
@@ -69,6 +102,7 @@ class FoxgloveNode(Node):
 
     def destroy_node(self) -> None:
         self.live_view.close()
+        self.ros_parameters.close()
         counts = ", ".join(f"{topic} {count}" for topic, count in
                            sorted(self.live_view.counts.items()))
         self.get_logger().info(f"live view on {self.live_view.url} stopped: {counts}")
