@@ -14,8 +14,10 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
+        # the nodes' parameter YAML, and the Foxglove layout (JSON)
         *[(f"share/{PACKAGE}/{folder}",
-           [str(path.relative_to(HERE)) for path in sorted((HERE / folder).glob("*.yaml"))])
+           [str(path.relative_to(HERE)) for path in sorted((HERE / folder).glob("*.*"))
+            if path.suffix in (".yaml", ".json")])
           for folder in ("config", "config/airframes")],
     ],
     install_requires=["setuptools"],
