@@ -9,6 +9,7 @@ import os
 import signal
 import socket
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -79,6 +80,16 @@ def listening_tcp(pgid: int) -> list[tuple[str, int]]:
                 address, port = local.split(":")
                 found.append((_proc_net_address(address, family), int(port, 16)))
     return found
+
+
+def listening_port(pgid: int, timeout_s: float) -> int:
+    """The port of the one TCP socket the processes of group pgid listen on, once they do
+    (within timeout_s: a server that binds after it starts); AssertionError otherwise."""
+    deadline = time.monotonic() + timeout_s
+    while not (found := listening_tcp(pgid)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert len(found) == 1, found
+    return found[0][1]
 
 
 def _proc_net_address(hex_address: str, family: int) -> str:

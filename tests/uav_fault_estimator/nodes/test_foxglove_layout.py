@@ -13,9 +13,9 @@ import time
 
 import foxglove.layouts as fl
 import pytest
-from helpers.process_table import listening_tcp
+from helpers.process_table import listening_port
 from uav_common.package_data import config_path
-from uav_common.ros_processes import SIM_TIME_ROS_ARGS, ros2_run_argv, wait_until
+from uav_common.ros_processes import SIM_TIME_ROS_ARGS, ros2_run_argv
 from uav_fault_estimator.live_view import SUBPROTOCOL
 from uav_fault_estimator.recording.project_bag import project_typestore
 from websockets.sync.client import connect
@@ -95,8 +95,7 @@ def test_every_topic_the_layout_names_is_advertised_while_the_graph_runs(
                                     ros_args=SIM_TIME_ROS_ARGS), node_name)
     node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
         "-p", "port:=0", *SIM_TIME_ROS_ARGS]), "foxglove_node")
-    assert wait_until(lambda: listening_tcp(node.pid), timeout_s=30), node.output()
-    [(_address, port)] = listening_tcp(node.pid)
+    port = listening_port(node.pid, timeout_s=30)
     advertised: dict[str, str] = {}  # topic: type
     with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
                  open_timeout=10) as client:

@@ -18,7 +18,7 @@ import time
 import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from helpers.process_table import listening_tcp
+from helpers.process_table import listening_port, listening_tcp
 from helpers.ros2_param import param_get, param_set
 from rclpy.serialization import deserialize_message
 from uav_common.package_data import default_parameters
@@ -214,10 +214,8 @@ def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
         "-p", "wait_for_subscribers:=0"]), "sim_node")
     node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
         "-p", "port:=0", "-p", "use_sim_time:=true"]), "foxglove_node")
+    port = listening_port(node.pid, timeout_s=30)
     deadline = time.monotonic() + 30
-    while not listening_tcp(node.pid) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    [(_address, port)] = listening_tcp(node.pid)
     with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
                  open_timeout=10) as client:
         server_info = next_op(client, "serverInfo", timeout_s=10)
@@ -271,10 +269,8 @@ def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_pro
     # parameter services no executor serves: its requests wait for ever
     silent = rclpy.create_node("silent_node", context=graph.context)
     try:
+        port = listening_port(node.pid, timeout_s=30)
         deadline = time.monotonic() + 30
-        while not listening_tcp(node.pid) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        [(_address, port)] = listening_tcp(node.pid)
         with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
                      open_timeout=10) as client:
             ask = {"op": "getParameters", "parameterNames": [], "id": "all"}
