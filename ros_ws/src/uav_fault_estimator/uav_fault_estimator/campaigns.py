@@ -1,0 +1,252 @@
+"""Campaigns: one function over many independent tasks (a flight, a log), in this process, on
+local worker processes or on a Dask cluster of several machines, with each task's result
+cached on disk, failures reported and the campaign going on, and a progress bar.
+
+Execution is Dask distributed's (`dask[distributed]`): a LocalCluster of `workers`
+processes of one thread each on 127.0.0.1, or the scheduler at `cluster`
+(tcp://HOST:8786), whose workers run this checkout's code (docs/performance.md says how
+to start them). A worker that dies has its tasks redone on another (Dask's own). Each task
+is pure: its result depends on the task and the code alone, so the results are the serial
+run's bit for bit and a cached one is as good as a new one.
+
+The cache: `cache_dir/<code version>/<task key>.pkl`, the code version a hash of the
+project's packages (Python modules and their data: aircraft, scenarios, calibrations) and of
+the file defining the function, the task key a hash of the function's name and the pickled
+task. A campaign computes only the tasks without a cached result, and stores each result
+as it arrives, so an interrupted campaign resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import inspect
+import logging
+import os
+import pickle
+import sys
+import time
+import traceback
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from distributed import Client, LocalCluster, as_completed
+from tqdm import tqdm
+from uav_common.package_data import share_dir
+
+# The packages whose code and data a task's result may depend on.
+CODE_PACKAGES = ("uav_common", "uav_sim", "uav_fault_estimator")
+PICKLE_PROTOCOL = 5
+LOCALHOST = "127.0.0.1"
+
+
+@dataclass(frozen=True)
+class CampaignOptions:
+    """Where a campaign runs. workers: local processes (0: in this process, one task after
+    the other); cluster: a Dask scheduler's address instead (its workers); cache_dir: the
+    results' cache (None: none); progress: a progress bar on stderr."""
+
+    workers: int = field(default_factory=lambda: os.cpu_count() or 1)
+    cluster: str | None = None
+    cache_dir: Path | None = None
+    progress: bool = True
+
+
+@dataclass(frozen=True)
+class TaskFailure:
+    """A task that raised: its index, the task, and the error (its last line, and the whole
+    traceback)."""
+
+    index: int
+    task: Any
+    error: str
+    traceback: str
+
+
+@dataclass
+class CampaignResult:
+    """The results in the tasks' order (None where a task failed), the failures, and how
+    many results were computed and how many read from the cache."""
+
+    results: list
+    failures: list[TaskFailure]
+    computed: int
+    cached: int
+    wall_s: float
+
+    def raise_failures(self) -> None:
+        """RuntimeError naming every failed task, if any."""
+        if self.failures:
+            lines = [f"task {f.index} ({_short(f.task)}): {f.error}" for f in self.failures]
+            raise RuntimeError(f"{len(self.failures)} of {len(self.results)} tasks failed:\n"
+                               + "\n".join(lines))
+
+
+def run_campaign(function: Callable[[Any], Any], tasks: Sequence, name: str,
+                 options: CampaignOptions = CampaignOptions()) -> CampaignResult:
+    """function(task) for every task, where options say; the results in the tasks' order.
+    A task that raises is a TaskFailure; the others go on."""
+    started = time.monotonic()
+    cache = TaskCache(options.cache_dir, function) if options.cache_dir else None
+    results: list = [None] * len(tasks)
+    pending = []
+    for index, task in enumerate(tasks):
+        hit, value = cache.load(task) if cache else (False, None)
+        if hit:
+            results[index] = value
+        else:
+            pending.append(index)
+    failures: list[TaskFailure] = []
+    cached = len(tasks) - len(pending)
+    with tqdm(total=len(tasks), initial=cached, desc=name, unit="task", file=sys.stderr,
+              disable=not options.progress, dynamic_ncols=True) as bar:
+        bar.set_postfix(failed=0, cached=cached)
+        for index, outcome in _outcomes(function, tasks, pending, options):
+            if isinstance(outcome, _Raised):
+                failures.append(TaskFailure(index, tasks[index], outcome.error,
+                                            outcome.traceback))
+                logging.getLogger(__name__).error("%s: task %d (%s) failed: %s", name, index,
+                                                  _short(tasks[index]), outcome.error)
+            else:
+                results[index] = outcome
+                if cache:
+                    cache.store(tasks[index], outcome)
+            bar.update(1)
+            bar.set_postfix(failed=len(failures), cached=cached)
+    failures.sort(key=lambda failure: failure.index)
+    return CampaignResult(results, failures, len(pending) - len(failures), cached,
+                          time.monotonic() - started)
+
+
+@dataclass(frozen=True)
+class _Raised:
+    error: str
+    traceback: str
+
+
+def _outcomes(function: Callable, tasks: Sequence, pending: list[int],
+              options: CampaignOptions) -> Iterator[tuple[int, Any]]:
+    """(index, result or _Raised) of each pending task, as they finish."""
+    if not pending:
+        return
+    if options.cluster is None and options.workers == 0:
+        for index in pending:
+            yield index, _call(function, tasks[index])
+        return
+    with dask_client(options) as client:
+        futures = {client.submit(_call, function, tasks[index], pure=False): index
+                   for index in pending}
+        for future in as_completed(futures):
+            index = futures[future]
+            if future.status == "error":  # the task itself is caught in _call: a lost worker
+                error = future.exception()
+                yield index, _Raised(_error_line(error), "".join(
+                    traceback.format_exception(error)))
+            else:
+                yield index, future.result()
+            future.release()
+
+
+def _call(function: Callable, task: Any) -> Any:
+    """function(task), or what it raised (as text: any exception, picklable or not)."""
+    try:
+        return function(task)
+    except Exception as error:
+        return _Raised(_error_line(error), traceback.format_exc())
+
+
+@contextmanager
+def dask_client(options: CampaignOptions):
+    """A Dask client of the cluster the options name, or of a LocalCluster of
+    options.workers single-threaded processes on 127.0.0.1 without a dashboard."""
+    if options.cluster is not None:
+        with Client(options.cluster, timeout="30s") as client:
+            yield client
+        return
+    with LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
+                      host=LOCALHOST, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        yield client
+
+
+def _error_line(error: BaseException) -> str:
+    return f"{type(error).__name__}: {error}".splitlines()[0]
+
+
+def _short(task: Any, length: int = 120) -> str:
+    """A task as one line, for messages: a scenario by its name and seed."""
+    if hasattr(task, "name") and hasattr(task, "seed"):
+        return f"scenario '{task.name}' seed {task.seed}"
+    text = " ".join(repr(task).split())
+    return text if len(text) <= length else text[:length - 3] + "..."
+
+
+class TaskCache:
+    """Results of one function's tasks on disk, for this code version."""
+
+    def __init__(self, cache_dir: Path, function: Callable) -> None:
+        self.function_name = f"{function.__module__}.{function.__qualname__}"
+        self.folder = Path(cache_dir) / code_version(function)
+
+    def path(self, task: Any) -> Path:
+        digest = hashlib.sha256(self.function_name.encode())
+        digest.update(pickle.dumps(task, protocol=PICKLE_PROTOCOL))
+        return self.folder / f"{digest.hexdigest()}.pkl"
+
+    def load(self, task: Any) -> tuple[bool, Any]:
+        """(True, the cached result) or (False, None)."""
+        try:
+            return True, pickle.loads(self.path(task).read_bytes())
+        except FileNotFoundError:
+            return False, None
+
+    def store(self, task: Any, result: Any) -> None:
+        """Written whole or not at all (a temporary file renamed)."""
+        path = self.path(task)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        temporary = path.with_suffix(f".{os.getpid()}.tmp")
+        temporary.write_bytes(pickle.dumps(result, protocol=PICKLE_PROTOCOL))
+        temporary.replace(path)
+
+
+def code_version(function: Callable) -> str:
+    """A hash (16 hex digits) of every file of CODE_PACKAGES (modules, and the data they
+    install: aircraft, scenarios, calibrations) and of the file defining function."""
+    digest = hashlib.sha256()
+    roots = []
+    for package in CODE_PACKAGES:
+        module = sys.modules.get(package) or __import__(package)
+        roots += [Path(module.__file__).parent, share_dir(package)]
+    files = sorted(path for root in roots for path in Path(root).rglob("*")
+                   if path.is_file() and "__pycache__" not in path.parts)
+    source = inspect.getsourcefile(function)
+    for path in [*files, *([Path(source)] if source else [])]:
+        digest.update(str(path.name).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def add_campaign_arguments(parser: argparse.ArgumentParser) -> None:
+    """--workers, --cluster, --cache, --no-progress for a script that runs a campaign."""
+    group = parser.add_argument_group("where the flights run (Dask)")
+    group.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                       help="local worker processes (default: the cores, %(default)s; 0: in "
+                            "this process, one after the other)")
+    group.add_argument("--cluster", metavar="tcp://HOST:8786",
+                       help="a running Dask scheduler to send the tasks to instead")
+    group.add_argument("--cache", type=Path, metavar="DIR",
+                       help="keep each task's result here, keyed by its inputs and the "
+                            "code's version: a rerun computes only what is missing")
+    group.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def campaign_options(args: argparse.Namespace) -> CampaignOptions:
+    """The options add_campaign_arguments' arguments give; ValueError for a negative
+    --workers."""
+    if args.workers < 0:
+        raise ValueError(f"--workers {args.workers}: 0 or more")
+    return CampaignOptions(workers=args.workers, cluster=args.cluster, cache_dir=args.cache,
+                           progress=not args.no_progress)

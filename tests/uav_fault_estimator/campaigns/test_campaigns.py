@@ -1,0 +1,90 @@
+"""The campaign layer: short flights on a LocalCluster of two workers give the serial run's
+results bit for bit; a failing task is reported with its input while the others finish; the
+cache makes a rerun compute only what is missing, and a new code version nothing old."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+
+import cloudpickle
+import numpy as np
+import pytest
+from uav_fault_estimator.campaigns import CampaignOptions, TaskCache, run_campaign
+from uav_fault_estimator.offline import GridFlight, fly_on_grid
+from uav_sim.scenario import default_scenario_path, load_scenario
+
+# workers import this module's functions by value: it is not on their path
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
+
+SERIAL = CampaignOptions(workers=0, progress=False)
+TWO_WORKERS = CampaignOptions(workers=2, progress=False)
+
+
+def flights(count: int, duration_s: float = 10.0) -> list:
+    """The default scenario cut short, with seeds 1..count."""
+    scenario = load_scenario(default_scenario_path())
+    return [dataclasses.replace(scenario, duration_s=duration_s, seed=seed)
+            for seed in range(1, count + 1)]
+
+
+def fly(scenario) -> GridFlight:
+    return fly_on_grid(scenario, 0.2)
+
+
+def fly_unless_seed_3(scenario) -> GridFlight:
+    if scenario.seed == 3:
+        raise ValueError("seed 3 refused")
+    return fly(scenario)
+
+
+def same(first: list[GridFlight], second: list[GridFlight]) -> bool:
+    """Every array of every flight equal, NaN where NaN, bit for bit."""
+    return all(np.array_equal(a, b, equal_nan=True) for x, y in zip(first, second, strict=True)
+               for a, b in zip(x, y, strict=True))
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_two_local_workers_give_the_serial_results_bit_for_bit():
+    tasks = flights(6)
+    serial = run_campaign(fly, tasks, "serial", SERIAL)
+    parallel = run_campaign(fly, tasks, "two workers", TWO_WORKERS)
+    print(f"serial {serial.wall_s:.2f} s, two workers {parallel.wall_s:.2f} s")
+    assert serial.failures == parallel.failures == []
+    assert (serial.computed, parallel.computed) == (6, 6)
+    assert same(serial.results, parallel.results)
+    assert not same(serial.results[:1], serial.results[1:2])  # seeds make other flights
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("options", [SERIAL, TWO_WORKERS], ids=["serial", "two_workers"])
+def test_a_failing_task_is_reported_with_its_input_and_the_others_finish(options):
+    result = run_campaign(fly_unless_seed_3, flights(4), "failing", options)
+    [failure] = result.failures
+    assert (failure.index, failure.task.seed, failure.error) == (2, 3,
+                                                                 "ValueError: seed 3 refused")
+    assert "fly_unless_seed_3" in failure.traceback
+    assert result.results[2] is None and all(result.results[i] for i in (0, 1, 3))
+    with pytest.raises(RuntimeError, match=r"task 2 \(scenario 'default' seed 3\): ValueError"):
+        result.raise_failures()
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_a_rerun_computes_only_what_the_interrupted_campaign_left(tmp_path):
+    tasks = flights(5)
+    cached = dataclasses.replace(SERIAL, cache_dir=tmp_path)
+    first = run_campaign(fly, tasks[:2], "interrupted", cached)  # as if stopped after two
+    rerun = run_campaign(fly, tasks, "rerun", dataclasses.replace(TWO_WORKERS,
+                                                                 cache_dir=tmp_path))
+    assert (first.computed, rerun.computed, rerun.cached) == (2, 3, 2)
+    assert same(rerun.results, run_campaign(fly, tasks, "serial", SERIAL).results)
+    again = run_campaign(fly, tasks, "again", cached)
+    assert (again.computed, again.cached) == (0, 5)
+    # one folder for this code version, a result per task; another function's tasks are
+    # its own
+    [version] = [path.name for path in tmp_path.iterdir()]
+    assert len(list((tmp_path / version).glob("*.pkl"))) == 5
+    assert TaskCache(tmp_path, fly_unless_seed_3).load(tasks[0]) == (False, None)
