@@ -4,31 +4,14 @@ from __future__ import annotations
 
 import math
 import re
-import subprocess
-import sys
 import time
 
 import pytest
 from helpers.echo_output import echo_documents
+from helpers.ros2_cli import run_cli
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, STAMP_NANOSEC, STAMP_SEC, topic_of
-from uav_common.ros_processes import RosProcess
 
 pytestmark = pytest.mark.integration
-
-PUBLISHER = [sys.executable, "tests/helpers/sample_publisher.py"]
-SAMPLE_TOPICS = ["/" + topic_of(name) for name in SAMPLE_FIELDS]
-
-
-@pytest.fixture
-def sample_publisher(start_process, ros_graph) -> RosProcess:
-    """A process publishing one sample of every message type at 10 Hz."""
-    process = start_process(PUBLISHER, "sample_publisher")
-    assert ros_graph.wait_for_topics(SAMPLE_TOPICS, timeout_s=30), process.output()
-    return process
-
-
-def run_cli(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess:
-    return subprocess.run(["ros2", *args], capture_output=True, text=True, timeout=timeout_s)
 
 
 def assert_close(printed, expected, path: str) -> None:

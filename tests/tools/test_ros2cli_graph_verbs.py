@@ -1,120 +1,21 @@
-"""The `ros2` stand-in's param, node info, topic info -v/pub/echo options/hz, against live
+"""The `ros2` stand-in's node info, topic info -v/pub/echo options/hz, against live
 processes, outputs checked field by field; interface show and bag info on installed files."""
 
 from __future__ import annotations
 
 import re
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import pytest
-import yaml
 from helpers.echo_output import echo_documents
-from helpers.repo import REPO_ROOT
+from helpers.ros2_cli import run_cli
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, topic_of
-from uav_common.ros_processes import RosProcess, ros2_run_argv
 
 pytestmark = pytest.mark.integration
 
-REPO = REPO_ROOT
-MHE_CONFIG = REPO / "ros_ws/src/uav_fault_estimator/config/mhe_node.yaml"
-PUBLISHER = [sys.executable, "tests/helpers/sample_publisher.py"]
 CLOCK_PUBLISHER = [sys.executable, "tests/tools/clock_publisher.py"]
-
-
-def run_cli(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess:
-    return subprocess.run(["ros2", *args], capture_output=True, text=True, timeout=timeout_s)
-
-
-def mhe_defaults() -> dict:
-    return yaml.safe_load(MHE_CONFIG.read_text())["/**"]["ros__parameters"]
-
-
-@pytest.fixture
-def mhe_node(start_process, ros_graph) -> RosProcess:
-    """mhe_node, waiting for residuals: a node with the project's parameters."""
-    process = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    assert ros_graph.wait_for_topics(["/faults/estimate"], timeout_s=30), process.output()
-    return process
-
-
-@pytest.fixture
-def sample_publisher(start_process, ros_graph) -> RosProcess:
-    process = start_process(PUBLISHER, "sample_publisher")
-    topics = ["/" + topic_of(name) for name in SAMPLE_FIELDS]
-    assert ros_graph.wait_for_topics(topics, timeout_s=30), process.output()
-    return process
-
-
-# ------------------------------------------------------------------------------ param
-@pytest.mark.slow
-@pytest.mark.timeout(90)
-def test_param_list_get_dump_show_the_config_values(mhe_node) -> None:
-    defaults = mhe_defaults()
-    listing = run_cli("param", "list", "/mhe_node")
-    assert listing.returncode == 0, listing.stderr
-    lines = listing.stdout.splitlines()
-    assert lines == sorted(lines) and all(line.startswith("  ") for line in lines)
-    names = [line.strip() for line in lines]
-    assert set(defaults) | {"use_sim_time"} <= set(names), names
-
-    everyone = run_cli("param", "list")
-    assert "/mhe_node:" in everyone.stdout.splitlines()
-
-    typed = run_cli("param", "list", "mhe_node", "--param-type")
-    assert "  horizon (type: integer)" in typed.stdout.splitlines()
-    assert "  fault_names (type: string array)" in typed.stdout.splitlines()
-
-    expected_lines = {
-        "horizon": f"Integer value is: {defaults['horizon']}",
-        "noise_variance_factor": f"Double value is: {defaults['noise_variance_factor']}",
-        "arrival_centre": f"String value is: {defaults['arrival_centre']}",
-        "estimate_wind_errors": f"Boolean value is: {defaults['estimate_wind_errors']}",
-        "fault_names": f"String values are: {defaults['fault_names']}",
-        "prior_pct": f"Double values are: array('d', {defaults['prior_pct']})",
-    }
-    for name, line in expected_lines.items():
-        got = run_cli("param", "get", "/mhe_node", name)
-        assert (got.returncode, got.stdout) == (0, line + "\n"), (name, got.stdout, got.stderr)
-
-    dump = run_cli("param", "dump", "/mhe_node")
-    assert dump.returncode == 0, dump.stderr
-    assert dump.stdout.startswith("/mhe_node:\n  ros__parameters:\n")
-    dumped = yaml.safe_load(dump.stdout)["/mhe_node"]["ros__parameters"]
-    for name, value in defaults.items():
-        assert dumped[name] == value, name
-    assert dumped["use_sim_time"] is False
-
-
-@pytest.mark.slow
-@pytest.mark.timeout(90)
-def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
-    result = run_cli("param", "set", "/mhe_node", "horizon", "60")
-    assert result.returncode == 0, result.stderr
-    answer = (result.stdout + result.stderr).strip()
-    # the horizon shapes the QP, built at start: read-only, so a set is refused with the reason
-    assert result.stdout == ""
-    assert answer == "Setting parameter failed: Trying to set a read-only parameter: horizon."
-    got = run_cli("param", "get", "/mhe_node", "horizon")
-    assert got.stdout == "Integer value is: 50\n"
-    wrong = run_cli("param", "set", "/mhe_node", "horizon", "many")
-    assert wrong.returncode == 0 and wrong.stdout == ""
-    assert re.fullmatch(r"Setting parameter failed: \S.*\n", wrong.stderr), wrong.stderr
-    print("param set answers:", answer, "|", wrong.stderr.strip())
-
-
-@pytest.mark.slow
-@pytest.mark.timeout(60)
-def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
-    missing_node = run_cli("param", "get", "/no_such_node", "horizon", "--spin-time", "1")
-    assert (missing_node.returncode, missing_node.stderr) == (1, "Node not found\n")
-    missing_param = run_cli("param", "get", "/mhe_node", "no_such_parameter")
-    assert missing_param.returncode == 1 and "Traceback" not in missing_param.stderr
-    assert missing_param.stderr == "Parameter not set\n" or missing_param.stdout == (
-        "Parameter not set.\n"
-    )
 
 
 # ----------------------------------------------------------------------- node info
