@@ -12,12 +12,13 @@ what this project's users need, with ros2cli's (Jazzy) output and exit statuses:
     ros2 node list [-a]
     ros2 node info NODE
     ros2 param list [NODE] | get NODE NAME | set NODE NAME VALUE | dump NODE
+    ros2 service list [-t] [-c] | type SERVICE | call SERVICE TYPE [YAML] [-r HZ]
     ros2 interface show TYPE
     ros2 bag info BAG
 
 Errors end with one line on stderr and exit status 1. The pure parts (formatting) are in
 ros2cli_render.py, the graph queries in ros2cli_graph.py, the parameter verbs in
-ros2cli_param.py.
+ros2cli_param.py, the service verbs in ros2cli_service.py.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import ros2cli_param
+import ros2cli_service
 import yaml
 from ros2cli_graph import (
     GRAPH_POLL_S,
@@ -402,6 +404,7 @@ def parser() -> argparse.ArgumentParser:
             help="longest time to wait for discovery to settle [s]",
         )
     ros2cli_param.add_parsers(commands, DEFAULT_SPIN_TIME_S)
+    ros2cli_service.add_parsers(commands, DEFAULT_SPIN_TIME_S)
 
     interface = commands.add_parser("interface", help="show interface definitions")
     show = interface.add_subparsers(dest="verb", required=True).add_parser("show")
