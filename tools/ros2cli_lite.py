@@ -11,7 +11,8 @@ what this project's users need, with ros2cli's (Jazzy) output and exit statuses:
     ros2 topic pub [-1 | -t TIMES] [-r RATE] TOPIC TYPE [YAML]
     ros2 node list [-a]
     ros2 node info NODE
-    ros2 param list [NODE] | get NODE NAME | set NODE NAME VALUE | dump NODE
+    ros2 param list [NODE] | get NODE NAME... | set NODE NAME VALUE... | dump NODE
+    ros2 param describe NODE NAME... | load NODE FILE [--use-wildcard]
     ros2 service list [-t] [-c] | type SERVICE | call SERVICE TYPE [YAML] [-r HZ]
     ros2 interface show TYPE
     ros2 bag info BAG

@@ -1,8 +1,9 @@
-"""`ros2 param list/get/set/dump` through a node's standard parameter services
+"""`ros2 param list/get/set/dump/load/describe` through a node's standard parameter services
 (rcl_interfaces/srv ListParameters, GetParameters, SetParameters, DescribeParameters), with
 ros2param's (Jazzy) output and exit statuses: "Node not found" and the other errors are one
-line on stderr and status 1; a refused `set` prints "Setting parameter failed: <reason>" on
-stderr with status 0, as ros2param does.
+line on stderr and status 1; a refused `set` or `load` prints "Setting parameter failed:
+<reason>" (`load`: "Set parameter NAME failed: <reason>") on stderr with status 0, as
+ros2param does.
 """
 
 from __future__ import annotations
@@ -150,37 +151,117 @@ def param_list(args: argparse.Namespace) -> int:
 
 
 def param_get(args: argparse.Namespace) -> int:
-    """`ros2 param get NODE NAME`: `Double value is: 4.0`; an undeclared name is an error."""
-
+    """`ros2 param get NODE NAME...`: `Double value is: 4.0`; with several names each line
+    starts `NAME: `, as ros2param's set does for several pairs; an undeclared name is an
+    error."""
     target = absolute_node_name(args.node_name)
     with graph_node() as node:
         wait_for_node(node, target, args.spin_time)
-        values = get_values(node, target, [args.parameter_name])
+        values = get_values(node, target, args.parameter_names)
     if not values:
         raise CliError("Parameter not set")
-    print(get_line(values[0], args.hide_type))
+    several = len(args.parameter_names) > 1
+    for name, value in zip(args.parameter_names, values, strict=True):
+        line = get_line(value, args.hide_type)
+        print(f"{name}: {line}" if several else line)
     return 0
 
 
-def param_set(args: argparse.Namespace) -> int:
-    """`ros2 param set NODE NAME VALUE`: the value parsed as YAML (rclpy's
-    get_parameter_value); prints the node's answer in ros2param's words, status 0 either way."""
-    from rcl_interfaces.msg import Parameter
+def print_set_results(results: list[Any], names: list[str], success: str, failure: str) -> None:
+    """One line per SetParametersResult, in ros2param's words: `success[: reason]` on stdout,
+    `failure[: reason]` on stderr; `{name}` in the words is the parameter's name."""
+    for name, result in zip(names, results, strict=True):
+        words = (success if result.successful else failure).format(name=name)
+        line = words + (f": {result.reason}" if result.reason else "")
+        print(line, file=sys.stdout if result.successful else sys.stderr)
+
+
+def set_parameters(node: Any, target: str, parameters: list[Any]) -> list[Any]:
+    """The node's SetParametersResult for each parameter (rcl_interfaces/msg/Parameter)."""
     from rcl_interfaces.srv import SetParameters
+
+    request = SetParameters.Request(parameters=parameters)
+    return list(call(node, SetParameters, target, "set_parameters", request).results)
+
+
+def param_set(args: argparse.Namespace) -> int:
+    """`ros2 param set NODE NAME VALUE [NAME VALUE ...]`: each value parsed as YAML (rclpy's
+    get_parameter_value); prints the node's answers in ros2param's words (`NAME: ` first when
+    several), status 0 either way."""
+    from rcl_interfaces.msg import Parameter
     from rclpy.parameter import get_parameter_value
 
+    words = args.params_and_values
+    if len(words) % 2:
+        raise CliError("Parameters must be provided as name/value pairs: name value "
+                       f"[name value ...]. Got {len(words)} argument(s).")
+    names = words[::2]
+    parameters = [
+        Parameter(name=name, value=get_parameter_value(text))
+        for name, text in zip(names, words[1::2], strict=True)
+    ]
     target = absolute_node_name(args.node_name)
-    parameter = Parameter(name=args.parameter_name, value=get_parameter_value(args.value))
     with graph_node() as node:
         wait_for_node(node, target, args.spin_time)
-        request = SetParameters.Request(parameters=[parameter])
-        response = call(node, SetParameters, target, "set_parameters", request)
-    result = response.results[0]
-    if result.successful:
-        print("Set parameter successful" + (f": {result.reason}" if result.reason else ""))
-    else:
-        message = "Setting parameter failed" + (f": {result.reason}" if result.reason else "")
-        print(message, file=sys.stderr)
+        results = set_parameters(node, target, parameters)
+    prefix = "{name}: " if len(names) > 1 else ""
+    print_set_results(results, names, prefix + "Set parameter successful",
+                      prefix + "Setting parameter failed")
+    return 0
+
+
+def param_load(args: argparse.Namespace) -> int:
+    """`ros2 param load NODE FILE [--use-wildcard]`: every node section of the parameters file
+    (and `/**` with --use-wildcard), as ros2param loads it; `Set parameter NAME successful`
+    or, on stderr, `Set parameter NAME failed: reason` for each; status 0 either way."""
+    from rclpy.parameter import parameter_dict_from_yaml_file
+
+    try:
+        parameters = list(
+            parameter_dict_from_yaml_file(args.parameter_file, args.use_wildcard).values()
+        )
+    except (OSError, RuntimeError, yaml.YAMLError, AttributeError) as error:
+        raise CliError(str(error)) from error
+    target = absolute_node_name(args.node_name)
+    with graph_node() as node:
+        wait_for_node(node, target, args.spin_time)
+        results = set_parameters(node, target, parameters)
+    names = [parameter.name for parameter in parameters]
+    print_set_results(results, names, "Set parameter {name} successful",
+                      "Set parameter {name} failed")
+    return 0
+
+
+def describe_lines(descriptor: Any) -> list[str]:
+    """ros2 param describe's lines for one ParameterDescriptor."""
+    lines = [f"Parameter name: {descriptor.name}",
+             f"  Type: {TYPE_NAMES.get(descriptor.type, 'unknown')}"]
+    if descriptor.description:
+        lines.append(f"  Description: {descriptor.description}")
+    lines.append("  Constraints:")
+    if descriptor.read_only:
+        lines.append("    Read only: true")
+    ranges = [*descriptor.floating_point_range, *descriptor.integer_range]
+    if ranges:
+        lines += [f"    Min value: {ranges[0].from_value}", f"    Max value: {ranges[0].to_value}"]
+        if ranges[0].step:
+            lines.append(f"    Step: {ranges[0].step}")
+    if descriptor.additional_constraints:
+        lines.append(f"    Additional constraints: {descriptor.additional_constraints}")
+    return lines
+
+
+def param_describe(args: argparse.Namespace) -> int:
+    """`ros2 param describe NODE NAME...`: type, description and constraints of each."""
+    from rcl_interfaces.srv import DescribeParameters
+
+    target = absolute_node_name(args.node_name)
+    with graph_node() as node:
+        wait_for_node(node, target, args.spin_time)
+        request = DescribeParameters.Request(names=args.parameter_names)
+        response = call(node, DescribeParameters, target, "describe_parameters", request)
+    for descriptor in response.descriptors:
+        print(*describe_lines(descriptor), sep="\n")
     return 0
 
 
@@ -197,7 +278,7 @@ def param_dump(args: argparse.Namespace) -> int:
 
 
 def add_parsers(commands: Any, spin_time_s: float) -> None:
-    """`ros2 param list|get|set|dump` on the top-level subparsers."""
+    """`ros2 param list|get|set|dump|load|describe` on the top-level subparsers."""
     param = commands.add_parser("param", help="inspect and set node parameters")
     verbs = param.add_subparsers(dest="verb", required=True)
     listing = verbs.add_parser("list", help="list a node's (or every node's) parameters")
@@ -206,20 +287,29 @@ def add_parsers(commands: Any, spin_time_s: float) -> None:
     listing.add_argument("--param-prefixes", nargs="+", default=[])
     listing.add_argument("--param-type", action="store_true", help="print the types too")
     listing.set_defaults(handler=param_list)
-    get = verbs.add_parser("get", help="print a parameter's value")
+    get = verbs.add_parser("get", help="print parameters' values")
     get.add_argument("node_name")
-    get.add_argument("parameter_name")
+    get.add_argument("parameter_names", nargs="+", metavar="parameter_name")
     get.add_argument("--hide-type", action="store_true")
     get.set_defaults(handler=param_get)
-    set_parser = verbs.add_parser("set", help="set a parameter (the value is YAML)")
+    set_parser = verbs.add_parser("set", help="set parameters (the values are YAML)")
     set_parser.add_argument("node_name")
-    set_parser.add_argument("parameter_name")
-    set_parser.add_argument("value")
+    set_parser.add_argument("params_and_values", nargs="+", metavar="name value")
     set_parser.set_defaults(handler=param_set)
     dump = verbs.add_parser("dump", help="print a node's parameters as YAML")
     dump.add_argument("node_name")
     dump.set_defaults(handler=param_dump)
-    for verb in (listing, get, set_parser, dump):
+    load = verbs.add_parser("load", help="set a node's parameters from a parameters file")
+    load.add_argument("node_name")
+    load.add_argument("parameter_file")
+    load.add_argument("--use-wildcard", action="store_true",
+                      help="also load the file's '/**' parameters")
+    load.set_defaults(handler=param_load)
+    describe = verbs.add_parser("describe", help="parameters' types and constraints")
+    describe.add_argument("node_name")
+    describe.add_argument("parameter_names", nargs="+", metavar="parameter_name")
+    describe.set_defaults(handler=param_describe)
+    for verb in (listing, get, set_parser, dump, load, describe):
         verb.add_argument(
             "--spin-time", "--timeout", type=float, default=spin_time_s, dest="spin_time",
             help="longest wait for the node to be discovered [s]",

@@ -217,5 +217,7 @@ def test_parser_of_the_new_verbs() -> None:
         parser().parse_args(["topic", "pub", "-1", "-t", "2", "/t", "std_msgs/msg/String"])
     echo = parser().parse_args(["topic", "echo", "/t", "--no-arr", "-l", "5"])
     assert (echo.no_arr, echo.truncate_length, echo.full_length) == (True, 5, False)
-    setting = parser().parse_args(["param", "set", "/n", "horizon", "60"])
-    assert (setting.node_name, setting.parameter_name, setting.value) == ("/n", "horizon", "60")
+    setting = parser().parse_args(["param", "set", "/n", "horizon", "60", "rate", "2"])
+    assert (setting.node_name, setting.params_and_values) == ("/n", ["horizon", "60", "rate", "2"])
+    getting = parser().parse_args(["param", "get", "/n", "horizon", "rate"])
+    assert getting.parameter_names == ["horizon", "rate"]

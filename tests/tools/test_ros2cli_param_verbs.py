@@ -85,3 +85,72 @@ def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
     assert missing_param.stderr == "Parameter not set\n" or missing_param.stdout == (
         "Parameter not set.\n"
     )
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(90)
+def test_param_get_and_set_of_several_names(mhe_node) -> None:
+    defaults = mhe_defaults()
+    got = run_cli("param", "get", "/mhe_node", "horizon", "arrival_centre")
+    assert (got.returncode, got.stdout) == (0, (
+        f"horizon: Integer value is: {defaults['horizon']}\n"
+        f"arrival_centre: String value is: {defaults['arrival_centre']}\n"
+    )), got.stderr
+    hidden = run_cli("param", "get", "/mhe_node", "horizon", "use_sim_time", "--hide-type")
+    assert hidden.stdout == f"horizon: {defaults['horizon']}\nuse_sim_time: False\n"
+    both = run_cli("param", "set", "/mhe_node", "noise_variance_factor", "2.5", "horizon", "7")
+    assert both.returncode == 0
+    assert both.stdout == "noise_variance_factor: Set parameter successful\n"
+    assert both.stderr == (
+        "horizon: Setting parameter failed: Trying to set a read-only parameter: horizon.\n"
+    )
+    after = run_cli("param", "get", "/mhe_node", "noise_variance_factor")
+    assert after.stdout == "Double value is: 2.5\n"
+    odd = run_cli("param", "set", "/mhe_node", "horizon")
+    assert (odd.returncode, odd.stderr) == (1, "Parameters must be provided as name/value "
+                                               "pairs: name value [name value ...]. Got 1 "
+                                               "argument(s).\n")
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(90)
+def test_param_describe_prints_type_description_and_constraints(mhe_node) -> None:
+    result = run_cli("param", "describe", "/mhe_node", "horizon", "use_sim_time")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    second = lines.index("Parameter name: use_sim_time")
+    horizon, sim_time = lines[:second], lines[second:]
+    assert horizon[:2] == ["Parameter name: horizon", "  Type: integer"]
+    assert horizon[2].startswith("  Description: ") and len(horizon[2]) > len("  Description: ")
+    assert horizon[3:5] == ["  Constraints:", "    Read only: true"]
+    assert re.fullmatch(r"    Min value: \d+", horizon[5])
+    assert re.fullmatch(r"    Max value: \d+", horizon[6])
+    assert sim_time == ["Parameter name: use_sim_time", "  Type: boolean", "  Constraints:"]
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(90)
+def test_param_load_sets_each_parameter_and_reports_it(mhe_node, tmp_path) -> None:
+    parameters = tmp_path / "mhe.yaml"
+    parameters.write_text(yaml.safe_dump(
+        {"/mhe_node": {"ros__parameters": {"noise_variance_factor": 3.5, "horizon": 10}}}
+    ))
+    result = run_cli("param", "load", "/mhe_node", str(parameters))
+    assert result.returncode == 0
+    assert result.stdout == "Set parameter noise_variance_factor successful\n"
+    assert result.stderr == (
+        "Set parameter horizon failed: Trying to set a read-only parameter: horizon.\n"
+    )
+    assert run_cli("param", "get", "/mhe_node", "noise_variance_factor").stdout == (
+        "Double value is: 3.5\n"
+    )
+    # the project's file holds only '/**' parameters: ros2param needs --use-wildcard for them
+    shared = run_cli("param", "load", "/mhe_node", str(MHE_CONFIG))
+    assert (shared.returncode, shared.stderr) == (
+        1, "Param file does not contain selected parameters\n"
+    )
+    wildcard = run_cli("param", "load", "/mhe_node", str(MHE_CONFIG), "--use-wildcard")
+    assert wildcard.returncode == 0 and "Traceback" not in wildcard.stderr
+    assert "Set parameter noise_variance_factor successful" in wildcard.stdout.splitlines()
+    missing = run_cli("param", "load", "/mhe_node", str(tmp_path / "none.yaml"))
+    assert missing.returncode == 1 and len(missing.stderr.splitlines()) == 1
