@@ -110,6 +110,17 @@ def service_names(node: Any) -> set[str]:
     return {name for name, _types in node.get_service_names_and_types()}
 
 
+def names_and_types(entries: list, hidden: bool) -> list:
+    """Sorted (name, types) pairs without hidden names (a part starting with `_`, such as
+    an action's `_action/...` endpoints) unless asked, as ros2node filters them."""
+    from rclpy.topic_or_service_is_hidden import topic_or_service_is_hidden
+
+    return sorted(
+        (name, types) for name, types in entries
+        if hidden or not topic_or_service_is_hidden(name)
+    )
+
+
 def topic_types(node: Any) -> dict[str, list[str]]:
     """Every topic in the graph with its type names."""
     return dict(node.get_topic_names_and_types())
@@ -131,8 +142,11 @@ def wait_for_topic_type(node: Any, topic: str, deadline: float | None) -> str | 
         spin_for(node, GRAPH_POLL_S)
 
 
-def subscription_qos(node: Any, topic: str) -> Any:
-    """A QoS that matches every publisher of `topic` (ros2cli's choice for echo and hz)."""
+def subscription_qos(node: Any, topic: str, base: Any = None) -> Any:
+    """`base` (default: depth 10) made to match every publisher of `topic`: reliable only if
+    all of them are, transient-local only if all of them are (ros2cli's choice for echo)."""
+    import copy
+
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
     publishers = node.get_publishers_info_by_topic(topic)
@@ -142,8 +156,9 @@ def subscription_qos(node: Any, topic: str) -> Any:
     transient = bool(publishers) and all(
         info.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL for info in publishers
     )
-    return QoSProfile(
-        depth=10,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE,
+    profile = QoSProfile(depth=10) if base is None else copy.copy(base)
+    profile.reliability = ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
+    profile.durability = (
+        DurabilityPolicy.TRANSIENT_LOCAL if transient else DurabilityPolicy.VOLATILE
     )
+    return profile

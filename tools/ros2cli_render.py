@@ -1,8 +1,9 @@
 """Pure parts of the project's `ros2` command: no ROS graph, so unit-testable.
 
 Messages as ros2cli's YAML (rosidl_runtime_py.message_to_yaml: truncation, --no-arr), YAML
-values into messages (set_message_fields, for `topic pub`), the receive-rate window of
-`topic hz` (ros2topic's ROSTopicHz), interface definitions (`interface show`) and rosbag2
+values into messages (set_message_fields, for `topic pub`), CSV lines (`topic echo --csv`),
+the receive-rate window of `topic hz` (ros2topic's ROSTopicHz), the bandwidth window of
+`topic bw`, interface definitions (`interface show`) and rosbag2
 metadata (`bag info`, rosbag2_py's format_bag_meta_data).
 """
 
@@ -109,16 +110,50 @@ def field_value(message: Any, field_path: str | None) -> Any:
     return value
 
 
-def format_document(value: Any, **options: Any) -> str:
-    """One YAML document as ros2 topic echo prints it, ending with the `---` separator."""
+def format_document(value: Any, flow_style: bool = False, **options: Any) -> str:
+    """One YAML document as ros2 topic echo prints it, ending with the `---` separator;
+    flow_style: collections in flow style (`{a: 1, b: [2, 3]}`), as echo's --flow-style."""
     plain = to_plain(value, **options)
     if isinstance(plain, dict | list):
         text = yaml.safe_dump(
-            plain, sort_keys=False, default_flow_style=False, width=sys.maxsize, allow_unicode=True
+            plain, sort_keys=False, default_flow_style=flow_style, width=sys.maxsize,
+            allow_unicode=True,
         )
     else:
         text = f"{plain}\n"
     return text + "---"
+
+
+def format_csv(
+    value: Any,
+    field_type: Any = None,
+    truncate_length: int | None = None,
+    no_arr: bool = False,
+    no_str: bool = False,
+) -> str:
+    """A message as one line of comma-separated values, every field recursively in order,
+    as rosidl_runtime_py's message_to_csv prints it for ros2 topic echo --csv: an array
+    cut after truncate_length elements with `...`, a string or bytes after truncate_length
+    characters with `...` appended."""
+    options = {"truncate_length": truncate_length, "no_arr": no_arr, "no_str": no_str}
+    if is_message(value):
+        names = value.get_fields_and_field_types()
+        return ",".join(
+            format_csv(getattr(value, name), slot, **options)
+            for name, slot in zip(names, value.SLOT_TYPES, strict=True)
+        )
+    if isinstance(value, list | tuple | array.array | numpy.ndarray):
+        if no_arr and field_type is not None:
+            return abbreviated_array(value, field_type)
+        items = [format_csv(item, **options) for item in list(value)[:truncate_length]]
+        too_long = truncate_length is not None and len(value) > truncate_length
+        return ",".join([*items, "..."] if too_long else items)
+    if isinstance(value, str) and no_str:
+        return f"<string length: <{len(value)}>>"
+    if isinstance(value, str | bytes) and truncate_length is not None:
+        cut = value[:truncate_length] + (b"..." if isinstance(value, bytes) else "...")
+        value = cut if len(value) > truncate_length else value
+    return str(value)
 
 
 # --------------------------------------------------------------- YAML into a message
@@ -217,6 +252,43 @@ class RateWindow:
             f"max: {max(periods) * 1e-9:.3f}s std dev: {std_dev * 1e-9:.5f}s "
             f"window: {len(periods)}"
         )
+
+
+# -------------------------------------------------------------------------------- bw
+def bytes_text(size_bytes: float, unit_bytes: float) -> str:
+    """A size in ros2 topic bw's unit of the moment: B, KB or MB (powers of 1000)."""
+    if unit_bytes == 1:
+        return f"{size_bytes:.0f} B"
+    return f"{size_bytes / unit_bytes:.2f} {'KB' if unit_bytes == 1e3 else 'MB'}"
+
+
+class BandwidthWindow:
+    """ros2 topic bw's statistics (ros2topic.verb.bw.ROSTopicBandwidth): the arrival times
+    [s] and serialised sizes [B] of the last window_size messages."""
+
+    def __init__(self, window_size: int) -> None:
+        self.arrivals: deque[tuple[float, int]] = deque(maxlen=window_size)
+
+    def add(self, now_s: float, size_bytes: int) -> None:
+        self.arrivals.append((now_s, size_bytes))
+
+    def report(self, now_s: float) -> str | None:
+        """`N B/s from M messages` and the message sizes, or None before two messages
+        (ros2cli's once-a-second line): the window's bytes over the time since its first."""
+        if len(self.arrivals) < 2:
+            return None
+        first_s = self.arrivals[0][0]
+        if now_s <= first_s:  # the clock went back (sim time reset): start again
+            self.arrivals.clear()
+            return None
+        sizes = [size for _arrival, size in self.arrivals]
+        rate = sum(sizes) / (now_s - first_s)
+        unit = 1 if rate < 1e3 else 1e3 if rate < 1e6 else 1e6
+        mean, smallest, largest = (
+            bytes_text(x, unit) for x in (sum(sizes) / len(sizes), min(sizes), max(sizes))
+        )
+        return (f"{bytes_text(rate, unit)}/s from {len(sizes)} messages\n"
+                f"\tMessage size mean: {mean} min: {smallest} max: {largest}")
 
 
 # -------------------------------------------------------------------- interface show

@@ -12,7 +12,14 @@ import time
 from typing import Any
 
 import yaml
-from ros2cli_graph import GRAPH_POLL_S, absolute_name, graph_node, settle_graph, spin_for
+from ros2cli_graph import (
+    GRAPH_POLL_S,
+    absolute_name,
+    graph_node,
+    names_and_types,
+    settle_graph,
+    spin_for,
+)
 from ros2cli_render import CliError, set_message_fields
 
 
@@ -30,21 +37,13 @@ def service_class(type_name: str) -> Any:
     return service
 
 
-def service_names_and_types(node: Any, hidden: bool) -> list[tuple[str, list[str]]]:
-    """(name, types) of every service in the graph, sorted; hidden ones only when asked."""
-    from rclpy.topic_or_service_is_hidden import topic_or_service_is_hidden
-
-    return sorted(
-        (name, types) for name, types in node.get_service_names_and_types()
-        if hidden or not topic_or_service_is_hidden(name)
-    )
-
-
 def service_list(args: argparse.Namespace) -> int:
     """`ros2 service list`: names, `-t` with `[types]`, `-c` only their number."""
     with graph_node() as node:
         settle_graph(node, args.spin_time)
-        services = service_names_and_types(node, args.include_hidden_services)
+        services = names_and_types(
+            node.get_service_names_and_types(), args.include_hidden_services
+        )
     if args.count_services:
         print(len(services))
         return 0
@@ -57,9 +56,9 @@ def service_type(args: argparse.Namespace) -> int:
     """`ros2 service type NAME`: one type a line; status 1 for a service not in the graph."""
     name = absolute_name(args.service_name)
     with graph_node() as node:
-        settle_graph(node, args.spin_time, ready=lambda: name in dict(
-            service_names_and_types(node, hidden=True)))
-        types = dict(service_names_and_types(node, hidden=True)).get(name)
+        settle_graph(node, args.spin_time,
+                     ready=lambda: name in dict(node.get_service_names_and_types()))
+        types = dict(node.get_service_names_and_types()).get(name)
     if not types:
         raise CliError(f"Unknown service '{name}'")
     print(*types, sep="\n")

@@ -11,8 +11,10 @@ sys.path.insert(0, str(REPO_ROOT / "tools"))
 from ros2cli_lite import CliError, field_value, format_document, parser
 from ros2cli_param import dump_text, get_line
 from ros2cli_render import (
+    BandwidthWindow,
     RateWindow,
     format_bag_info,
+    format_csv,
     format_size,
     interface_lines,
     set_message_fields,
@@ -221,3 +223,37 @@ def test_parser_of_the_new_verbs() -> None:
     assert (setting.node_name, setting.params_and_values) == ("/n", ["horizon", "60", "rate", "2"])
     getting = parser().parse_args(["param", "get", "/n", "horizon", "rate"])
     assert getting.parameter_names == ["horizon", "rate"]
+
+
+@pytest.mark.timeout(10)
+def test_csv_lines_like_message_to_csv() -> None:
+    from uav_fault_msgs.msg import FaultVector
+
+    vector = FaultVector(names=["lift", "drag"], values_pct=[1.5, 2.0])
+    vector.header.frame_id = "ned"
+    assert format_csv(vector) == "0,0,ned,lift,drag,1.5,2.0"
+    assert format_csv(vector, truncate_length=1) == "0,0,n...,l...,...,1.5,..."
+    assert format_csv(vector, no_arr=True, no_str=True) == (
+        "0,0,<string length: <3>>,<sequence type: string, length: 2>,"
+        "<sequence type: double, length: 2>"
+    )
+
+
+@pytest.mark.timeout(10)
+def test_bandwidth_window_like_ros2topic_bw() -> None:
+    window = BandwidthWindow(3)
+    window.add(10.0, 100)
+    assert window.report(11.0) is None  # two messages at least
+    for k in range(1, 5):
+        window.add(10.0 + k, 100 + k)
+    # the last three messages (102, 103, 104 B) since the first of them at 12 s
+    assert window.report(15.0) == (
+        "103 B/s from 3 messages\n\tMessage size mean: 103 B min: 102 B max: 104 B"
+    )
+    big = BandwidthWindow(100)
+    big.add(0.0, 2_000_000)
+    big.add(0.5, 2_000_000)
+    assert big.report(1.0) == (
+        "4.00 MB/s from 2 messages\n\tMessage size mean: 2.00 MB min: 2.00 MB max: 2.00 MB"
+    )
+    assert big.report(0.0) is None and not big.arrivals  # the clock went back
