@@ -3,7 +3,8 @@
 Written by hand because neither ros2cli nor rosidl_runtime_py installs from PyPI. It covers
 what this project's users need, with ros2cli's (Jazzy) output and exit statuses:
 
-    ros2 run PKG EXECUTABLE [ARGS...]
+    ros2 run [--prefix CMD] PKG EXECUTABLE [ARGS...]
+    ros2 pkg executables [PKG] [--full-path]
     ros2 topic list [-t] [-c] [-v] [-a] | type TOPIC | find TYPE [-c]
     ros2 topic echo TOPIC [--once] [--field F] [--timeout S] [--no-arr] [-l N | -f]
                     [--csv] [--flow-style] [--filter EXPR] [-i] [--qos-* ...]
@@ -16,22 +17,25 @@ what this project's users need, with ros2cli's (Jazzy) output and exit statuses:
     ros2 param list [NODE] | get NODE NAME... | set NODE NAME VALUE... | dump NODE
     ros2 param describe NODE NAME... | load NODE FILE [--use-wildcard]
     ros2 service list [-t] [-c] | type SERVICE | call SERVICE TYPE [YAML] [-r HZ]
-    ros2 interface show TYPE
+    ros2 interface show TYPE [--no-comments | --all-comments] | list [-m] [-s] [-a]
+    ros2 interface package PKG
     ros2 bag info BAG
 
 Errors end with one line on stderr and exit status 1. The pure parts (formatting) are in
 ros2cli_render.py, the graph queries in ros2cli_graph.py, the topic verbs in
 ros2cli_topic.py, the parameter verbs in ros2cli_param.py, the service verbs in
-ros2cli_service.py.
+ros2cli_service.py, the interface verbs in ros2cli_interface.py.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import sys
 from collections.abc import Callable, Sequence
 
+import ros2cli_interface
 import ros2cli_param
 import ros2cli_service
 import ros2cli_topic
@@ -47,7 +51,6 @@ from ros2cli_render import (
     bag_info,
     field_value,
     format_document,
-    interface_lines,
 )
 
 __all__ = ["CliError", "field_value", "format_document", "main", "parser"]
@@ -55,26 +58,56 @@ __all__ = ["CliError", "field_value", "format_document", "main", "parser"]
 DEFAULT_SPIN_TIME_S = 2.0
 
 
-# ----------------------------------------------------------------------------- run
-def find_executable(package: str, executable: str) -> str:
-    """Path of `lib/<package>/<executable>` in the package's ament prefix, as ros2 run finds it."""
+# ------------------------------------------------------------------------ run / pkg
+def executable_paths(package: str) -> list[str]:
+    """The executable files under `lib/<package>` of the package's ament prefix, folders
+    starting with `.` skipped, in walk order (ros2pkg's get_executable_paths)."""
     from ament_index_python.packages import PackageNotFoundError, get_package_prefix
 
     try:
         prefix = get_package_prefix(package)
     except (PackageNotFoundError, ValueError) as error:
         raise CliError(f"Package '{package}' not found") from error
-    path = os.path.join(prefix, "lib", package, executable)
-    if not (os.path.isfile(path) and os.access(path, os.X_OK)):
+    paths = []
+    for folder, subfolders, files in os.walk(os.path.join(prefix, "lib", package)):
+        subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+        paths += [path for name in sorted(files)
+                  if os.access(path := os.path.join(folder, name), os.X_OK)]
+    return paths
+
+
+def find_executable(package: str, executable: str) -> str:
+    """The package's one executable of that name, as ros2 run finds it."""
+    paths = [path for path in executable_paths(package) if os.path.basename(path) == executable]
+    if not paths:
         raise CliError(f"No executable found: '{executable}' in package '{package}'")
-    return path
+    if len(paths) > 1:
+        raise CliError("Multiple executables found: " + ", ".join(paths))
+    return paths[0]
 
 
 def run(args: argparse.Namespace) -> int:
-    """Replace this process with the executable, so signals reach it directly."""
+    """Replace this process with the executable (after the --prefix command, e.g. `time` or
+    `gdb -ex run --args`, split as a shell would), so signals reach it directly."""
     path = find_executable(args.package, args.executable)
-    os.execv(path, [path, *args.arguments])
-    return 1  # not reached: execv does not return
+    command = [*shlex.split(args.prefix or ""), path, *args.arguments]
+    try:
+        os.execvp(command[0], command)
+    except OSError as error:  # a prefix command that is not there
+        raise CliError(f"Could not run '{command[0]}': {error.strerror}") from error
+    return 1  # not reached: exec does not return
+
+
+def pkg_executables(args: argparse.Namespace) -> int:
+    """ros2 pkg executables [PKG]: `pkg executable` a line (--full-path: the paths), for
+    the package or every package, sorted."""
+    from ament_index_python.packages import get_packages_with_prefixes
+
+    packages = [args.package_name] if args.package_name else get_packages_with_prefixes()
+    for package in sorted(packages):
+        for path in sorted(executable_paths(package)):
+            print(path if args.full_path else f"{package} {os.path.basename(path)}")
+    return 0
 
 
 # --------------------------------------------------------------------------- nodes
@@ -137,15 +170,7 @@ def node_info(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------ interface / bag
-def interface_show(args: argparse.Namespace) -> int:
-    """ros2 interface show: the definition, nested types expanded one tab deeper."""
-    comments = args.all_comments or not args.no_comments
-    for line in interface_lines(args.type, comments, args.all_comments):
-        print(line)
-    return 0
-
-
+# ----------------------------------------------------------------------------- bag
 def bag_info_verb(args: argparse.Namespace) -> int:
     """ros2 bag info: a recording's files, size, storage, times, messages and topics."""
     print(bag_info(args.bag_path))
@@ -159,10 +184,18 @@ def parser() -> argparse.ArgumentParser:
     commands = root.add_subparsers(dest="command", required=True)
 
     run_parser = commands.add_parser("run", help="run an executable of a package")
+    run_parser.add_argument("--prefix", help="command to run it with, e.g. 'time -p'")
     run_parser.add_argument("package")
     run_parser.add_argument("executable")
     run_parser.add_argument("arguments", nargs=argparse.REMAINDER)
     run_parser.set_defaults(handler=run)
+    pkg = commands.add_parser("pkg", help="inspect packages").add_subparsers(
+        dest="verb", required=True
+    )
+    executables = pkg.add_parser("executables", help="list packages' executables")
+    executables.add_argument("package_name", nargs="?")
+    executables.add_argument("--full-path", action="store_true", help="print the paths")
+    executables.set_defaults(handler=pkg_executables)
 
     node = commands.add_parser("node", help="inspect nodes").add_subparsers(
         dest="verb", required=True
@@ -186,13 +219,7 @@ def parser() -> argparse.ArgumentParser:
     ros2cli_service.add_parsers(commands, DEFAULT_SPIN_TIME_S)
     ros2cli_topic.add_parsers(commands, DEFAULT_SPIN_TIME_S)
 
-    interface = commands.add_parser("interface", help="show interface definitions")
-    show = interface.add_subparsers(dest="verb", required=True).add_parser("show")
-    show.add_argument("type")
-    comments = show.add_mutually_exclusive_group()
-    comments.add_argument("--all-comments", action="store_true")
-    comments.add_argument("--no-comments", action="store_true")
-    show.set_defaults(handler=interface_show)
+    ros2cli_interface.add_parsers(commands)
 
     bag = commands.add_parser("bag", help="inspect rosbag2 recordings")
     bag_info_parser = bag.add_subparsers(dest="verb", required=True).add_parser("info")

@@ -3,8 +3,7 @@
 Messages as ros2cli's YAML (rosidl_runtime_py.message_to_yaml: truncation, --no-arr), YAML
 values into messages (set_message_fields, for `topic pub`), CSV lines (`topic echo --csv`),
 the receive-rate window of `topic hz` (ros2topic's ROSTopicHz), the bandwidth window of
-`topic bw`, interface definitions (`interface show`) and rosbag2
-metadata (`bag info`, rosbag2_py's format_bag_meta_data).
+`topic bw` and rosbag2 metadata (`bag info`, rosbag2_py's format_bag_meta_data).
 """
 
 from __future__ import annotations
@@ -16,7 +15,7 @@ import os
 import sys
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -289,58 +288,6 @@ class BandwidthWindow:
         )
         return (f"{bytes_text(rate, unit)}/s from {len(sizes)} messages\n"
                 f"\tMessage size mean: {mean} min: {smallest} max: {largest}")
-
-
-# -------------------------------------------------------------------- interface show
-def interface_path(type_name: str) -> Path:
-    """The definition file of `pkg/msg/Type` (or srv, action) in the package's share folder."""
-    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
-
-    parts = type_name.split("/")
-    if len(parts) != 3:
-        raise CliError(f"Invalid name '{type_name}'. Expected three parts separated by '/'")
-    package, kind, name = parts
-    try:
-        share = Path(get_package_share_directory(package))
-    except (PackageNotFoundError, ValueError) as error:
-        raise CliError(f"Unknown package '{package}'") from error
-    path = share / kind / f"{name}.{kind}"
-    if not path.is_file():
-        raise CliError(f"Could not find the interface '{path}'")
-    return path
-
-
-def interface_lines(
-    type_name: str, comments: bool = True, nested_comments: bool = False, indent: int = 0
-) -> Iterator[str]:
-    """ros2 interface show's lines: the file as written, each nested message type expanded
-    below its field one tab deeper, without its comments and blank lines (ros2interface's
-    show.py, on rosidl_adapter's parser)."""
-    from rosidl_adapter.parser import parse_message_string
-
-    package, _, name = type_name.split("/")
-    for raw in interface_path(type_name).read_text().splitlines():
-        text = raw.rstrip()
-        field = None
-        is_comment = False
-        if text not in ("---",):
-            spec = parse_message_string(package, name, text)
-            is_comment = bool(spec.annotations.get("comment"))
-            field = spec.fields[0] if spec.fields else None
-        if not comments:
-            if not text or is_comment:
-                continue
-            trailing = field.annotations.get("comment") if field is not None else None
-            if trailing:
-                text = text[: text.find(trailing[0]) - 1].strip()
-        yield f"{indent * chr(9)}{text}" if text else ""
-        if field is not None and "/" in str(field.type):
-            nested = str(field.type)
-            if field.type.is_array:
-                nested = nested[: nested.find("[")]
-            yield from interface_lines(
-                nested.replace("/", "/msg/"), nested_comments, nested_comments, indent + 1
-            )
 
 
 # -------------------------------------------------------------------------- bag info

@@ -8,6 +8,7 @@ from helpers.repo import REPO_ROOT
 
 sys.path.insert(0, str(REPO_ROOT / "tools"))
 
+from ros2cli_interface import interface_lines, without_comment
 from ros2cli_lite import CliError, field_value, format_document, parser
 from ros2cli_param import dump_text, get_line
 from ros2cli_render import (
@@ -16,7 +17,6 @@ from ros2cli_render import (
     format_bag_info,
     format_csv,
     format_size,
-    interface_lines,
     set_message_fields,
     to_plain,
 )
@@ -165,6 +165,14 @@ def test_interface_show_expands_nested_types_without_their_comments() -> None:
                     "string frame_id"]
     with pytest.raises(CliError, match="Unknown package 'nope'"):
         list(interface_lines("nope/msg/X"))
+
+
+@pytest.mark.timeout(10)
+def test_comments_end_at_a_hash_outside_quotes() -> None:
+    assert without_comment("float64 x   # metres") == "float64 x"
+    assert without_comment("    # a comment line") == ""
+    assert without_comment('string A="x#y"  # c') == 'string A="x#y"'
+    assert without_comment("string B='#' ") == "string B='#'"
 
 
 @pytest.mark.timeout(10)
