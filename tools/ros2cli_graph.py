@@ -121,6 +121,39 @@ def names_and_types(entries: list, hidden: bool) -> list:
     )
 
 
+def print_listing(entries: list, count: bool, show_types: bool) -> None:
+    """A graph listing as ros2cli prints it: only the number of entries (-c), or a name a
+    line, with `[types]` when asked (-t)."""
+    if count:
+        print(len(entries))
+    for name, types in [] if count else entries:
+        print(f"{name} [{', '.join(types)}]" if show_types else name)
+
+
+def print_types(kind: str, name: str, max_s: float) -> int:
+    """`ros2 topic|service type NAME` (kind `topic` or `service`): the types one a line,
+    once discovery has settled or the name has appeared; an error if it did not."""
+    from ros2cli_render import CliError
+
+    with graph_node() as node:
+        query = (node.get_topic_names_and_types if kind == "topic"
+                 else node.get_service_names_and_types)
+        settle_graph(node, max_s, ready=lambda: name in dict(query()))
+        types = dict(query()).get(name)
+    if not types:
+        raise CliError(f"Unknown {kind} '{name}'")
+    print(*types, sep="\n")
+    return 0
+
+
+def add_spin_time(verb: Any, default_s: float, *aliases: str) -> None:
+    """A graph query's --spin-time [s] (and aliases): the longest wait for discovery."""
+    verb.add_argument(
+        "--spin-time", *aliases, type=float, default=default_s, dest="spin_time",
+        help="longest time to wait for discovery to settle [s]",
+    )
+
+
 def topic_types(node: Any) -> dict[str, list[str]]:
     """Every topic in the graph with its type names."""
     return dict(node.get_topic_names_and_types())

@@ -41,6 +41,7 @@ import ros2cli_service
 import ros2cli_topic
 from ros2cli_graph import (
     absolute_name,
+    add_spin_time,
     graph_node,
     names_and_types,
     node_names,
@@ -211,10 +212,7 @@ def parser() -> argparse.ArgumentParser:
     node_info_parser.set_defaults(handler=node_info)
 
     for graph_query in (nodes, node_info_parser):
-        graph_query.add_argument(
-            "--spin-time", type=float, default=DEFAULT_SPIN_TIME_S,
-            help="longest time to wait for discovery to settle [s]",
-        )
+        add_spin_time(graph_query, DEFAULT_SPIN_TIME_S)
     ros2cli_param.add_parsers(commands, DEFAULT_SPIN_TIME_S)
     ros2cli_service.add_parsers(commands, DEFAULT_SPIN_TIME_S)
     ros2cli_topic.add_parsers(commands, DEFAULT_SPIN_TIME_S)

@@ -13,7 +13,13 @@ import sys
 from typing import Any
 
 import yaml
-from ros2cli_graph import graph_node, node_names, service_names, settle_graph
+from ros2cli_graph import (
+    add_spin_time,
+    graph_node,
+    node_names,
+    service_names,
+    settle_graph,
+)
 from ros2cli_render import CliError
 
 SERVICE_WAIT_S = 5.0
@@ -310,7 +316,4 @@ def add_parsers(commands: Any, spin_time_s: float) -> None:
     describe.add_argument("parameter_names", nargs="+", metavar="parameter_name")
     describe.set_defaults(handler=param_describe)
     for verb in (listing, get, set_parser, dump, load, describe):
-        verb.add_argument(
-            "--spin-time", "--timeout", type=float, default=spin_time_s, dest="spin_time",
-            help="longest wait for the node to be discovered [s]",
-        )
+        add_spin_time(verb, spin_time_s, "--timeout")

@@ -15,8 +15,11 @@ import yaml
 from ros2cli_graph import (
     GRAPH_POLL_S,
     absolute_name,
+    add_spin_time,
     graph_node,
     names_and_types,
+    print_listing,
+    print_types,
     settle_graph,
     spin_for,
 )
@@ -44,25 +47,13 @@ def service_list(args: argparse.Namespace) -> int:
         services = names_and_types(
             node.get_service_names_and_types(), args.include_hidden_services
         )
-    if args.count_services:
-        print(len(services))
-        return 0
-    for name, types in services:
-        print(f"{name} [{', '.join(types)}]" if args.show_types else name)
+    print_listing(services, args.count_services, args.show_types)
     return 0
 
 
 def service_type(args: argparse.Namespace) -> int:
     """`ros2 service type NAME`: one type a line; status 1 for a service not in the graph."""
-    name = absolute_name(args.service_name)
-    with graph_node() as node:
-        settle_graph(node, args.spin_time,
-                     ready=lambda: name in dict(node.get_service_names_and_types()))
-        types = dict(node.get_service_names_and_types()).get(name)
-    if not types:
-        raise CliError(f"Unknown service '{name}'")
-    print(*types, sep="\n")
-    return 0
+    return print_types("service", absolute_name(args.service_name), args.spin_time)
 
 
 def service_call(args: argparse.Namespace) -> int:
@@ -110,10 +101,7 @@ def add_parsers(commands: Any, spin_time_s: float) -> None:
     kind.set_defaults(handler=service_type)
     for graph_query in (listing, kind):
         graph_query.add_argument("--include-hidden-services", action="store_true")
-        graph_query.add_argument(
-            "--spin-time", type=float, default=spin_time_s,
-            help="longest time to wait for discovery to settle [s]",
-        )
+        add_spin_time(graph_query, spin_time_s)
     call = verbs.add_parser("call", help="call a service")
     call.add_argument("service_name")
     call.add_argument("service_type", help="e.g. rcl_interfaces/srv/GetParameters")

@@ -13,8 +13,11 @@ import yaml
 from ros2cli_graph import (
     GRAPH_POLL_S,
     absolute_name,
+    add_spin_time,
     graph_node,
     names_and_types,
+    print_listing,
+    print_types,
     settle_graph,
     spin_for,
     subscription_qos,
@@ -45,12 +48,10 @@ def topic_list(args: argparse.Namespace) -> int:
     with graph_node() as node:
         settle_graph(node, args.spin_time)
         topics = names_and_types(node.get_topic_names_and_types(), args.include_hidden_topics)
-        # Our own node neither publishes nor subscribes: every endpoint counted is another's.
+        # Counted with the others: our own hidden node's /parameter_events publisher.
         counts = {name: (node.count_publishers(name), node.count_subscribers(name))
                   for name, _types in topics}
-    if args.count_topics:
-        print(len(topics))
-    elif args.verbose:
+    if args.verbose and not args.count_topics:
         for title, kind, side in (("Published", "publisher", 0), ("Subscribed", "subscriber", 1)):
             print(f"{title} topics:")
             for name, types in topics:
@@ -59,21 +60,13 @@ def topic_list(args: argparse.Namespace) -> int:
                           + ("s" if count > 1 else ""))
             print()
     else:
-        for name, types in topics:
-            print(f"{name} [{', '.join(types)}]" if args.show_types else name)
+        print_listing(topics, args.count_topics, args.show_types)
     return 0
 
 
 def topic_type(args: argparse.Namespace) -> int:
     """`ros2 topic type TOPIC`: its type(s), one a line; status 1 for a topic not seen."""
-    topic = absolute_name(args.topic)
-    with graph_node() as node:
-        settle_graph(node, args.spin_time, ready=lambda: topic in topic_types(node))
-        types = topic_types(node).get(topic)
-    if not types:
-        raise CliError(f"Unknown topic '{topic}'")
-    print(*types, sep="\n")
-    return 0
+    return print_types("topic", absolute_name(args.topic), args.spin_time)
 
 
 def topic_find(args: argparse.Namespace) -> int:
@@ -81,9 +74,8 @@ def topic_find(args: argparse.Namespace) -> int:
     with graph_node() as node:
         settle_graph(node, args.spin_time)
         topics = names_and_types(node.get_topic_names_and_types(), args.include_hidden_topics)
-    found = [name for name, types in topics if args.topic_type in types]
-    for line in [len(found)] if args.count_topics else found:
-        print(line)
+    found = [(name, types) for name, types in topics if args.topic_type in types]
+    print_listing(found, args.count_topics, show_types=False)
     return 0
 
 
@@ -445,8 +437,5 @@ def add_parsers(commands: Any, spin_time_s: float) -> None:
     pub_parser.add_argument("--keep-alive", type=positive_float, default=0.1)
     pub_parser.set_defaults(handler=pub)
     for graph_query in (listing, find, kind, info):
-        graph_query.add_argument(
-            "--spin-time", type=float, default=spin_time_s,
-            help="longest time to wait for discovery to settle [s]",
-        )
+        add_spin_time(graph_query, spin_time_s)
 
