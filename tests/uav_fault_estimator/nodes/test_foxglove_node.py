@@ -19,7 +19,7 @@ import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.process_table import listening_port, listening_tcp
-from helpers.ros2_param import param_get, param_set
+from helpers.ros2_cli import param_get, param_set
 from rclpy.serialization import deserialize_message
 from uav_common.package_data import default_parameters
 from uav_common.ros.node_tools import STREAM_QOS

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 import pytest
-from helpers.ros2_param import param_get, param_set
+from helpers.ros2_cli import param_get, param_set
 from rosgraph_msgs.msg import Clock
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
