@@ -11,14 +11,15 @@ run's bit for bit and a cached one is as good as a new one.
 
 The cache: `cache_dir/<code version>/<task key>.pkl`, the code version a hash of the
 project's packages (Python modules and their data: aircraft, scenarios, calibrations) and of
-the file defining the function, the task key a hash of the function's name and the pickled
-task. A campaign computes only the tasks without a cached result, and stores each result
-as it arrives, so an interrupted campaign resumes where it stopped.
+the file defining the function, the task key a hash of the pickled function (by reference)
+and the pickled task. A campaign computes only the tasks without a cached result, and stores
+each result as it arrives, so an interrupted campaign resumes where it stopped.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import inspect
 import logging
@@ -28,7 +29,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -85,40 +86,108 @@ class CampaignResult:
                                + "\n".join(lines))
 
 
+class Campaign:
+    """Where a campaign's tasks run, for one or several runs (a calibration's iterations):
+    the Dask client, started at the first run that needs one and closed on leaving the
+    `with` block."""
+
+    def __init__(self, options: CampaignOptions = CampaignOptions()) -> None:
+        self.options = options
+        self._stack = ExitStack()
+        self._client: Client | None = None
+
+    def __enter__(self) -> Campaign:
+        return self
+
+    def __exit__(self, *_exception: object) -> None:
+        self._stack.close()
+        self._client = None
+
+    def run(self, function: Callable[[Any], Any], tasks: Sequence,
+            name: str) -> CampaignResult:
+        """function(task) for every task (a module-level function, or a partial or
+        picklable object of one); the results in the tasks' order. A task that raises is a
+        TaskFailure; the others go on."""
+        started = time.monotonic()
+        cache = TaskCache(self.options.cache_dir, function) if self.options.cache_dir else None
+        results: list = [None] * len(tasks)
+        pending = []
+        for index, task in enumerate(tasks):
+            hit, value = cache.load(task) if cache else (False, None)
+            if hit:
+                results[index] = value
+            else:
+                pending.append(index)
+        failures: list[TaskFailure] = []
+        cached = len(tasks) - len(pending)
+        with tqdm(total=len(tasks), initial=cached, desc=name, unit="task", file=sys.stderr,
+                  disable=not self.options.progress, dynamic_ncols=True) as bar:
+            bar.set_postfix(failed=0, cached=cached)
+            for index, outcome in self._outcomes(function, tasks, pending):
+                if isinstance(outcome, _Raised):
+                    failures.append(TaskFailure(index, tasks[index], outcome.error,
+                                                outcome.traceback))
+                    bar.write(f"{name}: task {index} ({_short(tasks[index])}) failed: "
+                              f"{outcome.error}", file=sys.stderr)
+                else:
+                    results[index] = outcome
+                    if cache:
+                        cache.store(tasks[index], outcome)
+                bar.update(1)
+                bar.set_postfix(failed=len(failures), cached=cached)
+        failures.sort(key=lambda failure: failure.index)
+        return CampaignResult(results, failures, len(pending) - len(failures), cached,
+                              time.monotonic() - started)
+
+    def results(self, function: Callable[[Any], Any], tasks: Sequence, name: str) -> list:
+        """run()'s results; RuntimeError naming every failed task once the others are done
+        (and cached: a rerun computes only the failed ones)."""
+        result = self.run(function, tasks, name)
+        result.raise_failures()
+        return result.results
+
+    def _outcomes(self, function: Callable, tasks: Sequence,
+                  pending: list[int]) -> Iterator[tuple[int, Any]]:
+        """(index, result or _Raised) of each pending task, as they finish."""
+        if not pending:
+            return
+        if self.options.cluster is None and self.options.workers == 0:
+            for index in pending:
+                yield index, _call(function, tasks[index])
+            return
+        client = self._dask_client()
+        futures = {client.submit(_call, function, tasks[index], pure=False): index
+                   for index in pending}
+        for future in as_completed(futures):
+            index = futures[future]
+            if future.status == "error":  # the task's own errors are caught: a lost worker
+                error = future.exception()
+                yield index, _Raised(_error_line(error),
+                                     "".join(traceback.format_exception(error)))
+            else:
+                yield index, future.result()
+            future.release()
+
+    def _dask_client(self) -> Client:
+        """The cluster the options name, or a LocalCluster of options.workers
+        single-threaded processes on 127.0.0.1 without a dashboard."""
+        if self._client is None:
+            if self.options.cluster is not None:
+                self._client = self._stack.enter_context(
+                    Client(self.options.cluster, timeout="30s"))
+            else:
+                cluster = self._stack.enter_context(LocalCluster(
+                    n_workers=self.options.workers, threads_per_worker=1, processes=True,
+                    host=LOCALHOST, dashboard_address=None, silence_logs=logging.ERROR))
+                self._client = self._stack.enter_context(Client(cluster))
+        return self._client
+
+
 def run_campaign(function: Callable[[Any], Any], tasks: Sequence, name: str,
                  options: CampaignOptions = CampaignOptions()) -> CampaignResult:
-    """function(task) for every task, where options say; the results in the tasks' order.
-    A task that raises is a TaskFailure; the others go on."""
-    started = time.monotonic()
-    cache = TaskCache(options.cache_dir, function) if options.cache_dir else None
-    results: list = [None] * len(tasks)
-    pending = []
-    for index, task in enumerate(tasks):
-        hit, value = cache.load(task) if cache else (False, None)
-        if hit:
-            results[index] = value
-        else:
-            pending.append(index)
-    failures: list[TaskFailure] = []
-    cached = len(tasks) - len(pending)
-    with tqdm(total=len(tasks), initial=cached, desc=name, unit="task", file=sys.stderr,
-              disable=not options.progress, dynamic_ncols=True) as bar:
-        bar.set_postfix(failed=0, cached=cached)
-        for index, outcome in _outcomes(function, tasks, pending, options):
-            if isinstance(outcome, _Raised):
-                failures.append(TaskFailure(index, tasks[index], outcome.error,
-                                            outcome.traceback))
-                logging.getLogger(__name__).error("%s: task %d (%s) failed: %s", name, index,
-                                                  _short(tasks[index]), outcome.error)
-            else:
-                results[index] = outcome
-                if cache:
-                    cache.store(tasks[index], outcome)
-            bar.update(1)
-            bar.set_postfix(failed=len(failures), cached=cached)
-    failures.sort(key=lambda failure: failure.index)
-    return CampaignResult(results, failures, len(pending) - len(failures), cached,
-                          time.monotonic() - started)
+    """One run of a Campaign of its own (Campaign.run)."""
+    with Campaign(options) as campaign:
+        return campaign.run(function, tasks, name)
 
 
 @dataclass(frozen=True)
@@ -127,49 +196,12 @@ class _Raised:
     traceback: str
 
 
-def _outcomes(function: Callable, tasks: Sequence, pending: list[int],
-              options: CampaignOptions) -> Iterator[tuple[int, Any]]:
-    """(index, result or _Raised) of each pending task, as they finish."""
-    if not pending:
-        return
-    if options.cluster is None and options.workers == 0:
-        for index in pending:
-            yield index, _call(function, tasks[index])
-        return
-    with dask_client(options) as client:
-        futures = {client.submit(_call, function, tasks[index], pure=False): index
-                   for index in pending}
-        for future in as_completed(futures):
-            index = futures[future]
-            if future.status == "error":  # the task itself is caught in _call: a lost worker
-                error = future.exception()
-                yield index, _Raised(_error_line(error), "".join(
-                    traceback.format_exception(error)))
-            else:
-                yield index, future.result()
-            future.release()
-
-
 def _call(function: Callable, task: Any) -> Any:
     """function(task), or what it raised (as text: any exception, picklable or not)."""
     try:
         return function(task)
     except Exception as error:
         return _Raised(_error_line(error), traceback.format_exc())
-
-
-@contextmanager
-def dask_client(options: CampaignOptions):
-    """A Dask client of the cluster the options name, or of a LocalCluster of
-    options.workers single-threaded processes on 127.0.0.1 without a dashboard."""
-    if options.cluster is not None:
-        with Client(options.cluster, timeout="30s") as client:
-            yield client
-        return
-    with LocalCluster(n_workers=options.workers, threads_per_worker=1, processes=True,
-                      host=LOCALHOST, dashboard_address=None,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
-        yield client
 
 
 def _error_line(error: BaseException) -> str:
@@ -188,11 +220,11 @@ class TaskCache:
     """Results of one function's tasks on disk, for this code version."""
 
     def __init__(self, cache_dir: Path, function: Callable) -> None:
-        self.function_name = f"{function.__module__}.{function.__qualname__}"
+        self.function = pickle.dumps(function, protocol=PICKLE_PROTOCOL)  # by reference
         self.folder = Path(cache_dir) / code_version(function)
 
     def path(self, task: Any) -> Path:
-        digest = hashlib.sha256(self.function_name.encode())
+        digest = hashlib.sha256(self.function)
         digest.update(pickle.dumps(task, protocol=PICKLE_PROTOCOL))
         return self.folder / f"{digest.hexdigest()}.pkl"
 
@@ -214,7 +246,8 @@ class TaskCache:
 
 def code_version(function: Callable) -> str:
     """A hash (16 hex digits) of every file of CODE_PACKAGES (modules, and the data they
-    install: aircraft, scenarios, calibrations) and of the file defining function."""
+    install: aircraft, scenarios, calibrations) and of the file defining function (or the
+    function a partial or callable object wraps)."""
     digest = hashlib.sha256()
     roots = []
     for package in CODE_PACKAGES:
@@ -222,9 +255,10 @@ def code_version(function: Callable) -> str:
         roots += [Path(module.__file__).parent, share_dir(package)]
     files = sorted(path for root in roots for path in Path(root).rglob("*")
                    if path.is_file() and "__pycache__" not in path.parts)
-    source = inspect.getsourcefile(function)
+    inner = function.func if isinstance(function, functools.partial) else function
+    source = inspect.getsourcefile(inner if inspect.isroutine(inner) else type(inner))
     for path in [*files, *([Path(source)] if source else [])]:
-        digest.update(str(path.name).encode())
+        digest.update(path.name.encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]
 
