@@ -23,10 +23,18 @@ import argparse
 import dataclasses
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
-from uav_fault_estimator.offline import each_in_processes, fly_and_estimate
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    CampaignOptions,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
+from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_sim.guidance import route_errors
 from uav_sim.mpc_guidance import MpcGuidance
@@ -82,12 +90,14 @@ def largest_fault_free_estimate_pct(scenario: Scenario) -> float:
     return float(estimates.values_pct[estimates.stamps_s >= SETTLE_S].max())
 
 
-def estimator_margins(base: Scenario) -> list[dict]:
-    """Per method, the largest fault-free estimate of each held-out seed's flight."""
+def estimator_margins(base: Scenario, options: CampaignOptions) -> list[dict]:
+    """Per method, the largest fault-free estimate of each held-out seed's flight, flown
+    where options say."""
     cases = [(method, seed) for method in METHODS for seed in HELD_OUT_SEEDS]
-    largest = each_in_processes(largest_fault_free_estimate_pct, [
-        dataclasses.replace(base, seed=seed, guidance=dataclasses.replace(
-            base.guidance, method=method)) for method, seed in cases])
+    with Campaign(options) as campaign:
+        largest = campaign.results(largest_fault_free_estimate_pct, [
+            dataclasses.replace(base, seed=seed, guidance=dataclasses.replace(
+                base.guidance, method=method)) for method, seed in cases], "held-out flights")
     margins = []
     for method in METHODS:
         values = [value for (flown, _), value in zip(cases, largest, strict=True)
@@ -99,9 +109,11 @@ def estimator_margins(base: Scenario) -> list[dict]:
     return margins
 
 
-def main() -> None:
+@exit_on_failed_tasks
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, help="write the figures here")
+    add_campaign_arguments(parser)  # the estimator's margins; the timed flights fly here
     arguments = parser.parse_args()
     base = dataclasses.replace(load_scenario(scenarios_dir() / "fault_free.yaml"), faults=())
     flights = []
@@ -114,7 +126,7 @@ def main() -> None:
             flights.append(figures)
             print(" ".join(f"{key} {value:.4g}" if isinstance(value, float)
                            else f"{key} {value}" for key, value in figures.items()), flush=True)
-    margins = estimator_margins(base)
+    margins = estimator_margins(base, campaign_options(arguments))
     for margin in margins:
         print(f"{margin['method']}: largest fault-free estimate per held-out flight [%] "
               + " ".join(f"{value:.2f}" for value in margin["largest_estimate_pct"])
@@ -127,7 +139,8 @@ def main() -> None:
              "settle_s": SETTLE_TRACK_S, "flights": flights,
              "estimator_settle_s": SETTLE_S, "threshold_pct": DETECTION_THRESHOLD_PCT,
              "estimator": margins}, indent=2) + "\n")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

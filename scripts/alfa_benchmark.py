@@ -36,6 +36,12 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from uav_common.package_data import config_path, default_parameters
+from uav_fault_estimator.campaigns import (
+    CampaignOptions,
+    add_campaign_arguments,
+    campaign_options,
+    run_campaign,
+)
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
@@ -58,7 +64,7 @@ from uav_fault_estimator.flight_logs.evaluation import (
 )
 from uav_fault_estimator.flight_logs.ground_truth import alfa_truth, is_alfa_flight
 from uav_fault_estimator.flight_logs.readers import log_paths
-from uav_fault_estimator.flight_logs.replay import load_replay
+from uav_fault_estimator.flight_logs.replay import ReplayTask, replay_of
 
 PROGRAM = "alfa_benchmark.py"
 ALFA_GENERATORS = ("roll_tracking", "pitch_tracking", "climb_tracking")
@@ -75,24 +81,28 @@ class BadInputError(Exception):
     """Input the user must mend: exit status 2 with the message as one line."""
 
 
-def labelled_flights(folder: Path, airframe: Path) -> list[LabelledFlight]:
-    """The labelled ALFA flights in folder on the detector's grid; the unlabelled said and
-    left out. BadInputError for a folder without ALFA flights or a flight that cannot be read."""
+def labelled_flights(folder: Path, airframe: Path,
+                     options: CampaignOptions) -> list[LabelledFlight]:
+    """The labelled ALFA flights in folder on the detector's grid, read where options say;
+    the unlabelled said and left out. BadInputError for a folder without ALFA flights or
+    flights that cannot be read (a line each, once the others are read)."""
     try:
         paths = [path for path in log_paths([folder]) if is_alfa_flight(path)]
         if not paths:
             raise BadInputError(f"{folder}: no ALFA flight folder in it")
-        flights = []
-        for path in paths:
-            truth = alfa_truth(path)
-            if not truth.labelled:
-                print(f"left out, unlabelled: {path.name}")
-                continue
-            replay = load_replay(path, airframe, None, DEFAULT_SAMPLE_PERIOD_S)
-            flights.append(LabelledFlight(path.name, replay.inputs, truth))
+        truths = {path: alfa_truth(path) for path in paths}
     except ValueError as error:
         raise BadInputError(str(error)) from None
-    return flights
+    for path, truth in truths.items():
+        if not truth.labelled:
+            print(f"left out, unlabelled: {path.name}")
+    labelled = [path for path, truth in truths.items() if truth.labelled]
+    read = run_campaign(replay_of, [ReplayTask.of(path, airframe, None, DEFAULT_SAMPLE_PERIOD_S)
+                                    for path in labelled], "ALFA flights", options)
+    if read.failures:
+        raise BadInputError("\n".join(failure.message for failure in read.failures))
+    return [LabelledFlight(path.name, replay.inputs, truths[path])
+            for path, replay in zip(labelled, read.results, strict=True)]
 
 
 def calibrator(arguments: argparse.Namespace, airframe_name: str):
@@ -115,13 +125,15 @@ def calibrator(arguments: argparse.Namespace, airframe_name: str):
 def run(arguments: argparse.Namespace) -> dict:
     """The benchmark's record (printed as it goes)."""
     started = time.monotonic()
-    flights = labelled_flights(arguments.alfa_folder, arguments.airframe)
+    flights = labelled_flights(arguments.alfa_folder, arguments.airframe,
+                               campaign_options(arguments))
     calibrated = calibrator(arguments, "carbon_z_alfa")
     try:
         if arguments.calibrate_on is None:
             outcomes = leave_one_out(flights, calibrated, arguments.false_alarm_probability)
         else:
-            calibration_flights = labelled_flights(arguments.calibrate_on, arguments.airframe)
+            calibration_flights = labelled_flights(arguments.calibrate_on, arguments.airframe,
+                                                   campaign_options(arguments))
             outcomes = calibrated_on(calibration_flights, flights, calibrated,
                                      arguments.false_alarm_probability)
     except ValueError as error:  # a generator without samples to fit it on
@@ -160,6 +172,7 @@ def parser() -> argparse.ArgumentParser:
     top.add_argument("--window", type=int, default=default_parameters(
         "uav_fault_estimator", "detector_node.yaml")["window"])
     top.add_argument("--settle-s", type=float, default=ALFA_SETTLE_S)
+    add_campaign_arguments(top)
     return top
 
 

@@ -24,6 +24,13 @@ import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    CampaignOptions,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S, DEFAULT_SETTLE_S
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
@@ -40,11 +47,13 @@ PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimat
 FIRST_SEED = 101
 
 
-def simulated(count: int) -> tuple[list, str]:
-    """count fault-free flights flown now, and the calibration file's header saying which."""
+def simulated(count: int, options: CampaignOptions) -> tuple[list, str]:
+    """count fault-free flights flown now, where options say, and the calibration file's
+    header saying which."""
     scenarios = fault_free_flights(count, FIRST_SEED)
-    flights = [flight.detector_flight
-               for flight in fly_on_grid_each(scenarios, DEFAULT_SAMPLE_PERIOD_S)]
+    with Campaign(options) as campaign:
+        flights = [flight.detector_flight for flight
+                   in fly_on_grid_each(campaign, scenarios, DEFAULT_SAMPLE_PERIOD_S)]
     header = (f"# Written by scripts/calibrate_detector.py: {len(scenarios)} fault-free flights "
               f"of\n# {describe_flights(scenarios)}.\n")
     return flights, header
@@ -59,6 +68,7 @@ def recorded(bags: list[Path]) -> tuple[list, str]:
     return flights, header
 
 
+@exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--flights", type=int, default=12)
@@ -67,12 +77,13 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=PACKAGE / "config/detector_calibration.yaml")
     parser.add_argument("--generators", type=generator_names, default=SURFACE_GENERATORS,
                         help="comma-separated (detection/generators.py; default roll,pitch,yaw)")
+    add_campaign_arguments(parser)
     arguments = parser.parse_args()
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     started = time.monotonic()
     try:
         flights, header = (recorded(arguments.bags) if arguments.bags
-                           else simulated(arguments.flights))
+                           else simulated(arguments.flights, campaign_options(arguments)))
         calibration = calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
                                 node["window"], DEFAULT_SETTLE_S,
                                 generators=arguments.generators)

@@ -21,6 +21,12 @@ import sys
 import time
 from pathlib import Path
 
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
 from uav_fault_estimator.estimation.noise_model import (
     AIR_DATA_ON_BOARD,
     CALIBRATION_FILE,
@@ -29,7 +35,6 @@ from uav_fault_estimator.estimation.noise_model import (
 )
 from uav_fault_estimator.offline import (
     describe_flights,
-    each_in_processes,
     fault_free_flights,
     fault_free_residuals,
     write_calibration,
@@ -40,16 +45,19 @@ PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimat
 FIRST_SEED = 301
 
 
+@exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--flights", type=int, default=4)
     parser.add_argument("--out", type=Path, default=PACKAGE / "config" / CALIBRATION_FILE)
+    add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
     base = fault_free_flights(arguments.flights, FIRST_SEED)
     scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=AIR_DATA_ON_BOARD[suite]))
                  for suite in SUITES.values() for s in base]
-    residuals = each_in_processes(fault_free_residuals, scenarios)
+    with Campaign(campaign_options(arguments)) as campaign:
+        residuals = campaign.results(fault_free_residuals, scenarios, "fault-free flights")
     count = len(base)
     calibration = fit_noise({suite: residuals[k * count:(k + 1) * count]
                              for k, suite in enumerate(SUITES.values())})

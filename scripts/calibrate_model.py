@@ -22,16 +22,23 @@ Exit status: 0 written; 1 the least squares did not solve; 2 a bad argument or r
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
 from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
 from uav_fault_estimator.estimation.model_file import calibration_dict
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
 from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
-from uav_fault_estimator.offline import each_in_processes, write_calibration
+from uav_fault_estimator.offline import write_calibration
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,
@@ -41,12 +48,14 @@ from uav_fault_estimator.recording.project_bag import (
 INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
 
 
+@exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING")
     parser.add_argument("--out", type=Path, required=True, metavar="MODEL.yaml")
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS),
                         help="comma-separated names (default: %(default)s)")
+    add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
     names = [name.strip() for name in arguments.parameters.split(",") if name.strip()]
@@ -63,9 +72,11 @@ def main() -> int:
     minutes = sum(f.times_s[-1] - f.times_s[0] for f in flights) / 60.0
     print(f"{len(flights)} flights, {minutes:.1f} min; parameters {', '.join(names)}")
     try:
-        calibration = calibrate(flights, names,
-                                default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                                load_noise_calibration(), map_flights=each_in_processes)
+        with Campaign(campaign_options(arguments)) as campaign:
+            calibration = calibrate(
+                flights, names, default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                load_noise_calibration(),
+                map_flights=functools.partial(campaign.results, name="recorded flights"))
     except CalibrationError as error:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 1

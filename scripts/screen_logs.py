@@ -56,6 +56,12 @@ from pathlib import Path
 from typing import NamedTuple
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.campaigns import (
+    CampaignOptions,
+    add_campaign_arguments,
+    campaign_options,
+    run_campaign,
+)
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
@@ -81,7 +87,7 @@ from uav_fault_estimator.flight_logs.ground_truth import (
     read_truth_table,
 )
 from uav_fault_estimator.flight_logs.readers import log_paths
-from uav_fault_estimator.flight_logs.replay import LogReplay, load_replay
+from uav_fault_estimator.flight_logs.replay import LogReplay, ReplayTask, replay_of
 from uav_fault_estimator.flight_logs.screening import (
     alarm_intervals,
     alarm_table,
@@ -121,25 +127,32 @@ class LoadedLog(NamedTuple):
 
 
 def load_logs(paths: Sequence[Path], airframe: Airframe, period_s: float,
-              truth_table: Path | None) -> dict[str, LoadedLog]:
-    """Every log that paths name (folders expanded) on the grid of period_s [s] with its
-    truth (the table's, else an ALFA folder's own), by name, each log's warnings printed
-    once; BadInputError for a log that cannot be read or used, a bad truth table, or two
-    logs of one name (their outputs would overwrite each other)."""
-    logs: dict[str, LoadedLog] = {}
+              truth_table: Path | None, options: CampaignOptions) -> dict[str, LoadedLog]:
+    """Every log that paths name (folders expanded) on the grid of period_s [s], read where
+    options say, with its truth (the table's, else an ALFA folder's own), by name, each
+    log's warnings printed once; BadInputError for a bad truth table, two logs of one name
+    (their outputs would overwrite each other), or logs that cannot be read or used (a line
+    each, once every other log is read)."""
     try:
         table = None if truth_table is None else read_truth_table(truth_table)
-        for path in log_paths(paths):
-            name = path.stem
-            if name in logs:
-                raise BadInputError(f"two logs named '{name}': {logs[name].replay.source} and "
-                                    f"{path}; rename one or screen them separately")
-            logs[name] = LoadedLog(load_replay(path, airframe.path, None, period_s),
-                                   flight_truth(path, name, table))
-            for line in logs[name].replay.inputs.warnings:  # each names its log
-                print(line)
+        found = log_paths(paths)
     except ValueError as error:
         raise BadInputError(str(error)) from None
+    named: dict[str, Path] = {}
+    for path in found:
+        if path.stem in named:
+            raise BadInputError(f"two logs named '{path.stem}': {named[path.stem]} and {path}; "
+                                "rename one or screen them separately")
+        named[path.stem] = path
+    tasks = [ReplayTask.of(path, airframe.path, None, period_s) for path in named.values()]
+    read = run_campaign(replay_of, tasks, "logs", options)
+    if read.failures:
+        raise BadInputError("\n".join(failure.message for failure in read.failures))
+    logs = {}
+    for (name, path), replay in zip(named.items(), read.results, strict=True):
+        logs[name] = LoadedLog(replay, flight_truth(path, name, table))
+        for line in replay.inputs.warnings:  # each names its log
+            print(line)
     return logs
 
 
@@ -147,7 +160,8 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
     """The calibrate command: the calibration file from the fault-free logs."""
     started = time.monotonic()
     airframe = airframe_of(arguments.airframe)
-    logs = load_logs(arguments.logs, airframe, DEFAULT_SAMPLE_PERIOD_S, arguments.truth)
+    logs = load_logs(arguments.logs, airframe, DEFAULT_SAMPLE_PERIOD_S, arguments.truth,
+                     campaign_options(arguments))
     unlabelled = [name for name, log in logs.items()
                   if log.truth is not None and not log.truth.labelled]
     if unlabelled:
@@ -202,7 +216,8 @@ def screen_logs(arguments: argparse.Namespace) -> None:
         raise BadInputError(str(error)) from None
     period_s = calibration.sample_period_s
     channels = calibration.channel_names
-    logs = load_logs(arguments.logs, airframe, period_s, arguments.truth)
+    logs = load_logs(arguments.logs, airframe, period_s, arguments.truth,
+                     campaign_options(arguments))
     out = arguments.out
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -278,6 +293,7 @@ def parser() -> argparse.ArgumentParser:
                                    help="M, the GLRT window [samples] (default detector_node's)")
     calibrate_command.add_argument("--settle-s", type=float, default=DEFAULT_SETTLE_S,
                                    help="no test this long after a start [s]")
+    add_campaign_arguments(calibrate_command)
     calibrate_command.set_defaults(run=calibrate_logs)
     screen_command = commands.add_parser("screen", help="screen logs for alarms")
     screen_command.add_argument("logs", type=Path, nargs="+", metavar="LOG")
@@ -290,6 +306,7 @@ def parser() -> argparse.ArgumentParser:
     screen_command.add_argument("--truth", type=Path, default=None,
                                 help="truth table (log,failure,onset_stamp_s); without it "
                                      "ALFA folders' own failure_status files")
+    add_campaign_arguments(screen_command)
     screen_command.set_defaults(run=screen_logs)
     return top
 

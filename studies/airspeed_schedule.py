@@ -25,6 +25,12 @@ import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.offline import fly_on_grid_each
 from uav_sim.paths import scenarios_dir
@@ -47,11 +53,13 @@ TEST_FLIGHTS_PER_AIRSPEED = 3
 CALIBRATION_SEED, TEST_SEED = 301, 401
 
 
+@exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--per-airspeed", type=int, default=4,
                         help="calibration flights per airspeed")
     parser.add_argument("--json", type=Path, help="write the figures here")
+    add_campaign_arguments(parser)
     arguments = parser.parse_args()
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     p_fa = node["false_alarm_probability"]
@@ -62,8 +70,9 @@ def main() -> int:
                                 CALIBRATION_SEED),
                  *fault_free_at(TEST_AIRSPEEDS_MPS, TEST_FLIGHTS_PER_AIRSPEED, TEST_SEED),
                  *(at_airspeed(aileron, airspeed) for airspeed in FAULT_AIRSPEEDS_MPS)]
-    flights = [flight.detector_flight
-               for flight in fly_on_grid_each(scenarios, DEFAULT_SAMPLE_PERIOD_S)]
+    with Campaign(campaign_options(arguments)) as campaign:
+        flights = [flight.detector_flight for flight
+                   in fly_on_grid_each(campaign, scenarios, DEFAULT_SAMPLE_PERIOD_S)]
     count = len(CALIBRATION_AIRSPEEDS_MPS) * arguments.per_airspeed
     calibration_flights, rest = flights[:count], flights[count:]
     faults = len(FAULT_AIRSPEEDS_MPS)

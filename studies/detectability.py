@@ -30,8 +30,14 @@ from pathlib import Path
 
 import numpy as np
 from uav_common.channels import PAPER_FAULT_NAMES
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
 from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD
-from uav_fault_estimator.offline import each_in_processes, fly_and_estimate, wind_variant
+from uav_fault_estimator.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
 from uav_sim.scenario import Scenario, SensorSuite, default_scenario_path, load_scenario
@@ -114,14 +120,18 @@ def print_table(summary: dict, seeds: int) -> None:
             print(f"| {suite} | {turbulence} | {largest} | {later} | {rmse} | {delay} |")
 
 
+@exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--json", type=Path, help="also write the summary here")
+    add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
     table = flights(arguments.seeds)
-    measured = each_in_processes(figures, [scenario for *_, scenario in table])
+    with Campaign(campaign_options(arguments)) as campaign:
+        measured = campaign.results(figures, [scenario for *_, scenario in table],
+                                    "detectability flights")
     summary = summarise([(*row[:3], f) for row, f in zip(table, measured, strict=True)])
     print_table(summary, arguments.seeds)
     print(f"\n{len(table)} flights in {time.monotonic() - started:.0f} s")

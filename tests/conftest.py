@@ -8,10 +8,13 @@ import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+import cloudpickle
+import helpers
 import pytest
 import yaml
 from helpers.ros_graph import RosGraph
 from uav_common.ros_processes import RosProcess, reserve_domain_id
+from uav_fault_estimator.campaigns import Campaign, CampaignOptions
 from uav_sim.scenario import default_scenario_path
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -29,6 +32,15 @@ def ros_domain(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
         yield domain_id
     finally:
         lock.close()
+
+
+@pytest.fixture(scope="session")
+def campaign() -> Iterator[Campaign]:
+    """Flights of the session's tests on local worker processes, one per core, started once
+    (the calibrations' and studies' own execution layer)."""
+    cloudpickle.register_pickle_by_value(helpers)  # not on the workers' path: sent along
+    with Campaign(CampaignOptions(progress=False)) as session_campaign:
+        yield session_campaign
 
 
 @pytest.fixture(scope="session")

@@ -222,6 +222,28 @@ def guidance(data: Mapping[str, Any]) -> list[str]:
          for margin in data.get("estimator", [])))
 
 
+# --- the campaign layer (benchmarks/bench_campaigns.py) -----------------------------------
+
+def campaigns(data: Mapping[str, Any]) -> list[str]:
+    flown, cost = data["flights"], data["per_task"]
+    lines = [f"{flown['flights']} detectability flights (300 s each, through the offline "
+             f"chain), results equal: {number(flown.get('equal_results'))}.", ""]
+    lines += table(("in one process [s]", "on 2 local workers [s]", "of which cluster start-up "
+                    "[s]", "times faster", "s per flight", "result [B]", "worker memory [MB]"),
+                   [(flown["serial_s"], flown["parallel_s"], flown["cluster_startup_s"],
+                     flown["speedup"], flown["seconds_per_flight"], flown["result_bytes_mean"],
+                     flown["worker_memory_mb_largest"])])
+    lines += [f"Per task, warm, over {cost['tasks']} tasks that return their input: Dask "
+              f"{number(cost['dask_ms_per_task'])} ms, a process pool "
+              f"{number(cost['process_pool_ms_per_task'])} ms.", "",
+              "A 10,000-flight detectability map, scaled from the flights above:", ""]
+    return lines + table(("flights (tasks)", "CPU hours", "workers", "wall hours",
+                          "memory per worker [MB]", "results [MB]"),
+                         ((plan["tasks"], plan["cpu_hours"], plan["workers"],
+                           plan["wall_hours"], plan["worker_memory_mb"], plan["results_mb"])
+                          for plan in data["plans"]))
+
+
 # --- the detector on ALFA's real flights (scripts/alfa_benchmark.py) ----------------------
 
 ALFA_COLUMNS = ("flight", "failure", "outcome", "delay_s", "first_alarm_channel",
@@ -345,6 +367,10 @@ SECTIONS = (
             "python -m benchmarks.bench_guidance --json docs/guidance.json", guidance,
             "The default route flown with the course vector field and with the paper's MPC "
             "guidance, in calm air and in wind (docs/simulator.md)."),
+    Section("Campaigns", "campaigns.json",
+            "python -m benchmarks.bench_campaigns --json docs/campaigns.json", campaigns,
+            "The campaign layer: flights in one process against local Dask workers, the "
+            "per-task cost, and the plan for a large map (docs/performance.md)."),
     Section("ALFA benchmark", "alfa_benchmark.json",
             "python scripts/alfa_benchmark.py ../shared/alfa/flights --json "
             "docs/alfa_benchmark.json", alfa_benchmark,

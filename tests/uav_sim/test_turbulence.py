@@ -20,7 +20,6 @@ import pytest
 from helpers.flights import turbulence_met
 from scipy.linalg import solve_continuous_lyapunov
 from scipy.signal import welch
-from uav_fault_estimator.offline import each_in_processes
 from uav_sim.aircraft import M_PER_FT
 from uav_sim.turbulence import (
     VonKarmanTurbulence,
@@ -121,13 +120,14 @@ FLIGHTS = [  # (altitude [m], wind speed [m/s], seed): two altitudes, two winds,
 
 @pytest.mark.slow
 @pytest.mark.timeout(300)
-def test_flights_meet_the_rule(default_scenario):
+def test_flights_meet_the_rule(default_scenario, campaign):
     """Four 300 s flights: each axis's standard deviation, pooled over the flights as a
     fraction of each flight's rule, within 25 % of it; every flight's band-averaged
     spectrum within 3 dB of the von Karman form over 0.05-2 Hz; the rotational gusts reach
     the rate derivatives."""
     ratios_squared = []
-    flown = each_in_processes(functools.partial(turbulence_met, default_scenario), FLIGHTS)
+    flown = campaign.results(functools.partial(turbulence_met, default_scenario), FLIGHTS,
+                             "turbulence flights")
     for (altitude_m, wind_mps, seed), (gusts, rates, rate_mismatch) in zip(FLIGHTS, flown,
                                                                             strict=True):
         scales = milspec_scales(wind_mps, altitude_m)

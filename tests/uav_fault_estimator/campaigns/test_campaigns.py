@@ -10,7 +10,13 @@ import sys
 import cloudpickle
 import numpy as np
 import pytest
-from uav_fault_estimator.campaigns import CampaignOptions, TaskCache, run_campaign
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    CampaignOptions,
+    TaskCache,
+    exit_on_failed_tasks,
+    run_campaign,
+)
 from uav_fault_estimator.offline import GridFlight, fly_on_grid
 from uav_sim.scenario import default_scenario_path, load_scenario
 
@@ -88,3 +94,16 @@ def test_a_rerun_computes_only_what_the_interrupted_campaign_left(tmp_path):
     [version] = [path.name for path in tmp_path.iterdir()]
     assert len(list((tmp_path / version).glob("*.pkl"))) == 5
     assert TaskCache(tmp_path, fly_unless_seed_3).load(tasks[0]) == (False, None)
+
+
+@pytest.mark.timeout(60)
+def test_a_script_whose_tasks_failed_says_which_in_lines_and_exits_1(capsys):
+    @exit_on_failed_tasks
+    def main() -> int:
+        return len(Campaign(SERIAL).results(fly_unless_seed_3, flights(3, 1.0), "failing"))
+
+    assert main() == 1
+    error = capsys.readouterr().err.splitlines()
+    assert error[1:] == ["task 2 (scenario 'default' seed 3): ValueError: seed 3 refused"]
+    assert error[0].endswith("1 of 3 tasks failed (the others' results are cached with "
+                             "--cache):")

@@ -48,14 +48,15 @@ UNSEEN_PER_AIRSPEED = 3  # test flights at each unseen airspeed
 
 
 @pytest.fixture(scope="module")
-def flown():
+def flown(campaign):
     """Calibration flights (PER_AIRSPEED at each calibration airspeed), fault-free flights
     at each unseen airspeed, the aileron loss at 23 m/s; its onset [s]."""
     aileron = load_scenario(scenarios_dir() / "aileron_loss.yaml")
     scenarios = [*fault_free_at(CALIBRATION_AIRSPEEDS_MPS, PER_AIRSPEED, 501),
                  *fault_free_at(UNSEEN_AIRSPEEDS_MPS, UNSEEN_PER_AIRSPEED, 601),
                  at_airspeed(aileron, 23.0)]
-    flights = [f.detector_flight for f in fly_on_grid_each(scenarios, DEFAULT_SAMPLE_PERIOD_S)]
+    flights = [f.detector_flight for f in fly_on_grid_each(campaign, scenarios,
+                                                                 DEFAULT_SAMPLE_PERIOD_S)]
     count = len(CALIBRATION_AIRSPEEDS_MPS) * PER_AIRSPEED
     return flights[:count], flights[count:-1], flights[-1], aileron.faults[0].start_s
 

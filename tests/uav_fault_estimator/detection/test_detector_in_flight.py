@@ -60,9 +60,10 @@ def test_the_shipped_calibration_is_what_the_command_makes(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.timeout(180)
-def test_false_alarm_rates_on_held_out_flights(calibration):
+def test_false_alarm_rates_on_held_out_flights(calibration, campaign):
     scenarios = fault_free_flights(12, first_seed=201, first_direction_deg=15.0)
-    flights = [flight[:3] for flight in fly_on_grid_each(scenarios, calibration.sample_period_s)]
+    flights = [flight[:3] for flight in fly_on_grid_each(campaign, scenarios,
+                                                                 calibration.sample_period_s)]
     raised = np.vstack([alarms(run_detector(calibration, flight, P_FA)) for flight in flights])
     rates = raised.mean(axis=0)
     print(f"designed P_FA {P_FA} per sample; {len(raised)} samples; measured: "

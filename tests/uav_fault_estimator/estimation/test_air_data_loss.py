@@ -14,7 +14,7 @@ from uav_common.channels import AIR_DATA_CHANNELS
 from uav_common.package_data import default_parameters
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
-from uav_fault_estimator.offline import each_in_processes, fly_and_estimate
+from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
 from uav_sim.paths import scenarios_dir
@@ -85,7 +85,7 @@ def test_a_fault_starting_during_the_loss_is_found_when_the_hold_ends():
 
 @pytest.mark.slow
 @pytest.mark.timeout(300)
-def test_a_30_s_air_data_loss_in_fault_free_flights_not_tuned_on():
+def test_a_30_s_air_data_loss_in_fault_free_flights_not_tuned_on(campaign):
     """Fault-free flights of seeds the estimator was not tuned on, air data lost from 100
     to 130 s. Weighting the filtered-wind samples (their Q, times 10, or blended back
     to the air data's along F_a's memory after the loss) left estimates of 2.2-3.6 %
@@ -94,8 +94,9 @@ def test_a_30_s_air_data_loss_in_fault_free_flights_not_tuned_on():
     scenario = load_scenario(scenarios_dir() / "fault_free.yaml")
     lost = tuple(SensorDropout(channel, 100.0, 130.0) for channel in AIR_DATA_CHANNELS)
     seeds = range(11, 17)
-    flights = each_in_processes(fly_and_estimate, [
-        dataclasses.replace(scenario, seed=seed, sensor_dropouts=lost) for seed in seeds])
+    flights = campaign.results(fly_and_estimate, [
+        dataclasses.replace(scenario, seed=seed, sensor_dropouts=lost) for seed in seeds],
+        "air data loss flights")
     largest = {seed: float(estimates.values_pct[estimates.stamps_s >= 100.0].max())
                for seed, (estimates, _) in zip(seeds, flights, strict=True)}
     print("largest fault-free estimate from the loss on, per seed [%]:", largest)

@@ -16,6 +16,8 @@ from uav_fault_msgs.msg import FaultAlarm, FaultEstimate, Residuals
 pytestmark = pytest.mark.integration
 
 SENSOR_DATA = ("-p", "qos:=sensor_data")
+# a namespace of this test's own: earlier tests' nodes in the session's domain stay apart
+NAMESPACE = ("-r", "__ns:=/qos")
 
 
 def reliability(graph, topic: str) -> set[str]:
@@ -28,25 +30,27 @@ def reliability(graph, topic: str) -> set[str]:
 @pytest.mark.timeout(120)
 def test_a_graph_on_sensor_data_estimates_and_the_default_stays_reliable(
         short_scenario, start_process, graph):
-    received = graph.subscribe({"/residuals": Residuals, "/faults/estimate": FaultEstimate,
-                                "/faults/alarm": FaultAlarm}, qos_profile_sensor_data)
+    received = graph.subscribe({"/qos/residuals": Residuals,
+                                "/qos/faults/estimate": FaultEstimate,
+                                "/qos/faults/alarm": FaultAlarm}, qos_profile_sensor_data)
     for name in ("residual_node", "mhe_node"):
-        start_process(ros2_run_argv("uav_fault_estimator", name, ros_args=list(SENSOR_DATA)),
-                      name)
+        start_process(ros2_run_argv("uav_fault_estimator", name,
+                                    ros_args=[*NAMESPACE, *SENSOR_DATA]), name)
     # the detector on the default: reliable, so it hears no best-effort state
-    start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
-    assert graph.wait_for_subscribers("/state", 2, timeout_s=30)
+    start_process(ros2_run_argv("uav_fault_estimator", "detector_node",
+                                ros_args=list(NAMESPACE)), "detector_node")
+    assert graph.wait_for_subscribers("/qos/state", 2, timeout_s=30)
     duration_s, factor = 10.0, 5.0
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
-        *SENSOR_DATA, "-p", f"scenario:={short_scenario(duration_s)}",
+        *NAMESPACE, *SENSOR_DATA, "-p", f"scenario:={short_scenario(duration_s)}",
         "-p", f"real_time_factor:={factor}", "-p", "wait_for_subscribers:=1"]), "sim_node")
-    graph.spin(30.0, until=lambda: len(received["/faults/estimate"]) > 0)
-    offered = {topic: reliability(graph, topic)
-               for topic in ("/state", "/residuals", "/faults/estimate", "/faults/alarm")}
+    graph.spin(30.0, until=lambda: len(received["/qos/faults/estimate"]) > 0)
+    offered = {topic.removeprefix("/qos"): reliability(graph, topic) for topic in
+               ("/qos/state", "/qos/residuals", "/qos/faults/estimate", "/qos/faults/alarm")}
     graph.spin(30.0, until=lambda: not sim.running())
     assert sim.wait(timeout_s=30) == 0, sim.output()
     graph.spin(2.0)
-    counts = {topic: len(messages) for topic, messages in received.items()}
+    counts = {topic.removeprefix("/qos"): len(messages) for topic, messages in received.items()}
     print(f"offered reliability: {offered}; received: {counts}")
     assert offered == {"/state": {"BEST_EFFORT"}, "/residuals": {"BEST_EFFORT"},
                        "/faults/estimate": {"BEST_EFFORT"}, "/faults/alarm": {"RELIABLE"}}

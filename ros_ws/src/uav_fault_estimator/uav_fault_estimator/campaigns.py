@@ -32,8 +32,9 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
+import cloudpickle
 from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 from uav_common.package_data import share_dir
@@ -42,13 +43,14 @@ from uav_common.package_data import share_dir
 CODE_PACKAGES = ("uav_common", "uav_sim", "uav_fault_estimator")
 PICKLE_PROTOCOL = 5
 LOCALHOST = "127.0.0.1"
+PROGRESS_AFTER_S = 2.0  # a campaign shows its progress bar once it has run this long [s]
 
 
 @dataclass(frozen=True)
 class CampaignOptions:
     """Where a campaign runs. workers: local processes (0: in this process, one task after
     the other); cluster: a Dask scheduler's address instead (its workers); cache_dir: the
-    results' cache (None: none); progress: a progress bar on stderr."""
+    results' cache (None: none); progress: a progress bar on stderr (for work that lasts)."""
 
     workers: int = field(default_factory=lambda: os.cpu_count() or 1)
     cluster: str | None = None
@@ -58,13 +60,18 @@ class CampaignOptions:
 
 @dataclass(frozen=True)
 class TaskFailure:
-    """A task that raised: its index, the task, and the error (its last line, and the whole
-    traceback)."""
+    """A task that raised: its index, the task, the exception's type name and first line,
+    and the whole traceback."""
 
     index: int
     task: Any
-    error: str
+    kind: str
+    message: str
     traceback: str
+
+    @property
+    def error(self) -> str:
+        return f"{self.kind}: {self.message}"
 
 
 @dataclass
@@ -79,11 +86,29 @@ class CampaignResult:
     wall_s: float
 
     def raise_failures(self) -> None:
-        """RuntimeError naming every failed task, if any."""
+        """CampaignFailedError naming every failed task, if any."""
         if self.failures:
             lines = [f"task {f.index} ({_short(f.task)}): {f.error}" for f in self.failures]
-            raise RuntimeError(f"{len(self.failures)} of {len(self.results)} tasks failed:\n"
-                               + "\n".join(lines))
+            raise CampaignFailedError(f"{len(self.failures)} of {len(self.results)} tasks failed "
+                                 "(the others' results are cached with --cache):\n"
+                                 + "\n".join(lines))
+
+
+class CampaignFailedError(RuntimeError):
+    """Tasks of a campaign raised: the message names each, a line per task."""
+
+
+def exit_on_failed_tasks(main: Callable[[], int | None]) -> Callable[[], int]:
+    """A script's main that, when tasks of a campaign failed, prints which (stderr) and
+    returns 1 rather than ending in a traceback."""
+    @functools.wraps(main)
+    def guarded() -> int:
+        try:
+            return main() or 0
+        except CampaignFailedError as error:
+            print(f"{Path(sys.argv[0]).name}: {error}", file=sys.stderr)
+            return 1
+    return guarded
 
 
 class Campaign:
@@ -121,27 +146,25 @@ class Campaign:
         failures: list[TaskFailure] = []
         cached = len(tasks) - len(pending)
         with tqdm(total=len(tasks), initial=cached, desc=name, unit="task", file=sys.stderr,
-                  disable=not self.options.progress, dynamic_ncols=True) as bar:
-            bar.set_postfix(failed=0, cached=cached)
+                  disable=not self.options.progress, dynamic_ncols=True,
+                  delay=PROGRESS_AFTER_S) as bar:
+            bar.set_postfix(failed=0, cached=cached, refresh=False)
             for index, outcome in self._outcomes(function, tasks, pending):
-                if isinstance(outcome, _Raised):
-                    failures.append(TaskFailure(index, tasks[index], outcome.error,
-                                                outcome.traceback))
-                    bar.write(f"{name}: task {index} ({_short(tasks[index])}) failed: "
-                              f"{outcome.error}", file=sys.stderr)
+                if isinstance(outcome, _Raised):  # counted on the bar, said at the end
+                    failures.append(TaskFailure(index, tasks[index], *outcome))
                 else:
                     results[index] = outcome
                     if cache:
                         cache.store(tasks[index], outcome)
                 bar.update(1)
-                bar.set_postfix(failed=len(failures), cached=cached)
+                bar.set_postfix(failed=len(failures), cached=cached, refresh=False)
         failures.sort(key=lambda failure: failure.index)
         return CampaignResult(results, failures, len(pending) - len(failures), cached,
                               time.monotonic() - started)
 
     def results(self, function: Callable[[Any], Any], tasks: Sequence, name: str) -> list:
-        """run()'s results; RuntimeError naming every failed task once the others are done
-        (and cached: a rerun computes only the failed ones)."""
+        """run()'s results; CampaignFailedError naming every failed task once the others are
+        done (and cached: a rerun computes only the failed ones)."""
         result = self.run(function, tasks, name)
         result.raise_failures()
         return result.results
@@ -151,26 +174,29 @@ class Campaign:
         """(index, result or _Raised) of each pending task, as they finish."""
         if not pending:
             return
-        if self.options.cluster is None and self.options.workers == 0:
+        # no cluster to start for one task
+        if self.options.cluster is None and (self.options.workers == 0 or len(pending) == 1):
             for index in pending:
                 yield index, _call(function, tasks[index])
             return
-        client = self._dask_client()
-        futures = {client.submit(_call, function, tasks[index], pure=False): index
+        client = self.client()
+        # pickled here, by cloudpickle: a function of a script or of a module registered to
+        # go by value reaches workers (and a scheduler) that cannot import it
+        pickled = cloudpickle.dumps(function)
+        futures = {client.submit(_call_pickled, pickled, tasks[index], pure=False): index
                    for index in pending}
         for future in as_completed(futures):
             index = futures[future]
             if future.status == "error":  # the task's own errors are caught: a lost worker
-                error = future.exception()
-                yield index, _Raised(_error_line(error),
-                                     "".join(traceback.format_exception(error)))
+                yield index, _raised(future.exception())
             else:
                 yield index, future.result()
             future.release()
 
-    def _dask_client(self) -> Client:
-        """The cluster the options name, or a LocalCluster of options.workers
-        single-threaded processes on 127.0.0.1 without a dashboard."""
+    def client(self) -> Client:
+        """The Dask client, connected at the first call: to the cluster the options name, or
+        to a LocalCluster of options.workers single-threaded processes, every port of it
+        (the dashboard's too) on 127.0.0.1."""
         if self._client is None:
             if self.options.cluster is not None:
                 self._client = self._stack.enter_context(
@@ -178,7 +204,8 @@ class Campaign:
             else:
                 cluster = self._stack.enter_context(LocalCluster(
                     n_workers=self.options.workers, threads_per_worker=1, processes=True,
-                    host=LOCALHOST, dashboard_address=None, silence_logs=logging.ERROR))
+                    host=LOCALHOST, dashboard_address=f"{LOCALHOST}:0",  # 127.0.0.1 alone
+                    silence_logs=logging.ERROR))
                 self._client = self._stack.enter_context(Client(cluster))
         return self._client
 
@@ -190,22 +217,30 @@ def run_campaign(function: Callable[[Any], Any], tasks: Sequence, name: str,
         return campaign.run(function, tasks, name)
 
 
-@dataclass(frozen=True)
-class _Raised:
-    error: str
+class _Raised(NamedTuple):
+    """What a task raised, as text (any exception, picklable or not)."""
+
+    kind: str
+    message: str
     traceback: str
 
 
+def _raised(error: BaseException) -> _Raised:
+    return _Raised(type(error).__name__, (str(error).splitlines() or [""])[0],
+                   "".join(traceback.format_exception(error)))
+
+
 def _call(function: Callable, task: Any) -> Any:
-    """function(task), or what it raised (as text: any exception, picklable or not)."""
+    """function(task), or _Raised."""
     try:
         return function(task)
     except Exception as error:
-        return _Raised(_error_line(error), traceback.format_exc())
+        return _raised(error)
 
 
-def _error_line(error: BaseException) -> str:
-    return f"{type(error).__name__}: {error}".splitlines()[0]
+def _call_pickled(pickled_function: bytes, task: Any) -> Any:
+    """_call of a function cloudpickle pickled."""
+    return _call(cloudpickle.loads(pickled_function), task)
 
 
 def _short(task: Any, length: int = 120) -> str:

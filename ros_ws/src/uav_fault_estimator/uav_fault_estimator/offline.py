@@ -8,10 +8,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import multiprocessing
 import os
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -23,6 +21,7 @@ from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
+from uav_fault_estimator.campaigns import Campaign
 from uav_fault_estimator.detection.detector import DetectorFlight
 from uav_fault_estimator.estimation.estimator_config import (
     config_from_parameters,
@@ -135,10 +134,12 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
                       np.array([s.setpoints for s in samples]))
 
 
-def fly_on_grid_each(scenarios: Sequence[Scenario],
-                     period_s: float) -> list[tuple[np.ndarray, ...]]:
-    """fly_on_grid of every scenario, one process per core (each_in_processes)."""
-    return each_in_processes(functools.partial(fly_on_grid, period_s=period_s), scenarios)
+def fly_on_grid_each(campaign: Campaign, scenarios: Sequence[Scenario],
+                     period_s: float) -> list[GridFlight]:
+    """fly_on_grid of every scenario, as the campaign runs them (CampaignFailedError naming the
+    flights that failed, once the others are done)."""
+    return campaign.results(functools.partial(fly_on_grid, period_s=period_s), scenarios,
+                            "flights")
 
 
 def sensor_flight(scenario: Scenario) -> SensorFlight:
@@ -174,15 +175,6 @@ def fault_free_residuals(scenario: Scenario) -> np.ndarray:
         if simulation.finished:
             return np.array(rows)
         sample = simulation.step()
-
-
-def each_in_processes(function, items: Sequence) -> list:
-    """function(item) for every item, one process per core: for independent flights, the
-    results of running them one after the other. Spawned, not forked: the caller may be a
-    ROS process with threads of its own."""
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=os.cpu_count(), mp_context=context) as pool:
-        return list(pool.map(function, items))
 
 
 def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,

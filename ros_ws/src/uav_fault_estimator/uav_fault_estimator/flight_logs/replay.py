@@ -60,3 +60,36 @@ def load_replay(log_path: str | Path, airframe_path: str | Path | None, axes: st
     inputs = detector_samples(log, airframe, period_s)
     air_data = air_data_rows(inputs.airspeed_mps) if AIRSPEED in log.streams else None
     return LogReplay(log.source, inputs, air_data)
+
+
+@dataclass(frozen=True)
+class ReplayTask:
+    """load_replay's arguments as one campaign task, with the signature of the files they
+    name (files_signature): a cached replay is one of these very files."""
+
+    log_path: Path
+    airframe_path: Path | None
+    axes: str | None
+    period_s: float
+    files: tuple
+
+    @classmethod
+    def of(cls, log_path: Path, airframe_path: Path | None, axes: str | None,
+           period_s: float) -> ReplayTask:
+        named = [log_path, *([airframe_path] if airframe_path else [])]
+        return cls(log_path, airframe_path, axes, period_s,
+                   tuple(files_signature(path) for path in named))
+
+
+def files_signature(path: Path) -> tuple[tuple[str, int, int], ...]:
+    """A file's, or a folder's files', (relative name, size [bytes], modification time [ns]):
+    put in a task that names a file, it makes the task's cache key change with the file."""
+    path = Path(path)
+    files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+    return tuple((str(p.relative_to(path)) if path.is_dir() else p.name, p.stat().st_size,
+                  p.stat().st_mtime_ns) for p in files if p.exists())
+
+
+def replay_of(task: ReplayTask) -> LogReplay:
+    """load_replay of a ReplayTask (a campaign's task function)."""
+    return load_replay(task.log_path, task.airframe_path, task.axes, task.period_s)

@@ -1,0 +1,124 @@
+#!/usr/bin/env python3
+"""Benchmark of the campaign layer: detectability's flights in this process against two
+local Dask workers, the per-task cost of the Dask path against a process pool, and what a
+10,000-flight detectability map would take.
+
+    python -m benchmarks.bench_campaigns [--flights 40] [--tiny-tasks 400] [--json FILE]
+
+Flights: the first --flights of studies/detectability.py's table (each a 300 s flight through
+the offline chain, the estimator on it). Per-task cost: a task that returns its input, run
+warm (after a first round) through Campaign on two workers and through a two-process
+ProcessPoolExecutor (spawned), wall time per task; the cluster's start-up apart. The plan
+scales the measured seconds per flight, result size and worker memory to 10,000 flights.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import os
+import pickle
+import resource
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from uav_fault_estimator.campaigns import Campaign, CampaignOptions
+
+from studies.detectability import figures, flights
+
+WORKERS = 2
+MAP_FLIGHTS = 10_000
+
+
+def echo(value: int) -> int:
+    """The cheapest task: its input."""
+    return value
+
+
+def peak_memory_mb() -> float:
+    """This process's largest resident memory so far [MB] (Linux reports kB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3
+
+
+def flights_serial_and_parallel(count: int) -> dict:
+    """count detectability flights in this process and on WORKERS local workers; the two
+    results must be equal (the campaign layer's promise)."""
+    scenarios = [scenario for *_, scenario in flights(seeds=5)][:count]
+    started = time.perf_counter()
+    serial = Campaign(CampaignOptions(workers=0, progress=False)).run(
+        figures, scenarios, "serial")
+    serial_s = time.perf_counter() - started
+    started = time.perf_counter()
+    with Campaign(CampaignOptions(workers=WORKERS, progress=False)) as campaign:
+        campaign.client()  # the cluster's start-up, timed apart
+        startup_s = time.perf_counter() - started
+        parallel = campaign.run(figures, scenarios, "two workers")
+        memory_mb = max(campaign.client().run(peak_memory_mb).values())
+    parallel_s = time.perf_counter() - started
+    assert serial.failures == parallel.failures == [] and serial.results == parallel.results
+    result_bytes = [len(pickle.dumps(result)) for result in serial.results]
+    return {"flights": count, "serial_s": serial_s, "workers": WORKERS,
+            "parallel_s": parallel_s, "cluster_startup_s": startup_s,
+            "speedup": serial_s / parallel_s, "seconds_per_flight": serial_s / count,
+            "result_bytes_mean": sum(result_bytes) / count,
+            "worker_memory_mb_largest": memory_mb, "equal_results": True}
+
+
+def per_task_cost(tasks: int) -> dict:
+    """Wall time per cheapest task [ms], warm: Dask on WORKERS workers against a process
+    pool of as many."""
+    items = list(range(tasks))
+    with Campaign(CampaignOptions(workers=WORKERS, progress=False)) as campaign:
+        campaign.run(echo, items, "warm-up")
+        started = time.perf_counter()
+        campaign.run(echo, items, "timed")
+        dask_s = time.perf_counter() - started
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=WORKERS, mp_context=context) as pool:
+        list(pool.map(echo, items))
+        started = time.perf_counter()
+        list(pool.map(echo, items))
+        pool_s = time.perf_counter() - started
+    return {"tasks": tasks, "dask_ms_per_task": 1e3 * dask_s / tasks,
+            "process_pool_ms_per_task": 1e3 * pool_s / tasks}
+
+
+def plan(measured: dict, workers: int) -> dict:
+    """MAP_FLIGHTS flights on `workers` workers like the measured ones."""
+    cpu_hours = MAP_FLIGHTS * measured["seconds_per_flight"] / 3600
+    return {"flights": MAP_FLIGHTS, "tasks": MAP_FLIGHTS, "cpu_hours": cpu_hours,
+            "workers": workers, "wall_hours": cpu_hours / workers,
+            "worker_memory_mb": measured["worker_memory_mb_largest"],
+            "results_mb": MAP_FLIGHTS * measured["result_bytes_mean"] / 1e6}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--flights", type=int, default=40)
+    parser.add_argument("--tiny-tasks", type=int, default=400)
+    parser.add_argument("--json", type=Path, help="write the figures here")
+    arguments = parser.parse_args()
+    measured = flights_serial_and_parallel(arguments.flights)
+    print(f"{measured['flights']} flights: serial {measured['serial_s']:.1f} s, "
+          f"{WORKERS} workers {measured['parallel_s']:.1f} s (cluster start-up "
+          f"{measured['cluster_startup_s']:.1f} s): {measured['speedup']:.2f} times faster; "
+          f"{measured['seconds_per_flight']:.2f} s per flight, result "
+          f"{measured['result_bytes_mean']:.0f} B, worker memory up to "
+          f"{measured['worker_memory_mb_largest']:.0f} MB", flush=True)
+    cost = per_task_cost(arguments.tiny_tasks)
+    print(f"per task, warm: Dask {cost['dask_ms_per_task']:.2f} ms, process pool "
+          f"{cost['process_pool_ms_per_task']:.2f} ms", flush=True)
+    plans = [plan(measured, workers) for workers in (os.cpu_count() or 1, 64)]
+    for entry in plans:
+        print(f"{entry['flights']} flights: {entry['cpu_hours']:.1f} CPU hours, "
+              f"{entry['wall_hours']:.1f} h on {entry['workers']} workers of "
+              f"{entry['worker_memory_mb']:.0f} MB; results {entry['results_mb']:.1f} MB")
+    if arguments.json:
+        arguments.json.write_text(json.dumps({"flights": measured, "per_task": cost,
+                                              "plans": plans}, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
