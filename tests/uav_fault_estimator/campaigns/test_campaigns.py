@@ -1,6 +1,6 @@
 """The campaign layer: short flights on a LocalCluster of two workers give the serial run's
 results bit for bit; a failing task is reported with its input while the others finish; the
-cache makes a rerun compute only what is missing, and a new code version nothing old."""
+cache makes a rerun, or a campaign resumed after Ctrl-C, compute only what is missing."""
 
 from __future__ import annotations
 
@@ -107,3 +107,28 @@ def test_a_script_whose_tasks_failed_says_which_in_lines_and_exits_1(capsys):
     assert error[1:] == ["task 2 (scenario 'default' seed 3): ValueError: seed 3 refused"]
     assert error[0].endswith("1 of 3 tasks failed (the others' results are cached with "
                              "--cache):")
+
+
+INTERRUPTED_AT_SEED = {"seed": None}  # the flight at which Ctrl-C "comes", in this process
+
+
+def fly_or_be_interrupted(scenario) -> GridFlight:
+    if scenario.seed == INTERRUPTED_AT_SEED["seed"]:
+        raise KeyboardInterrupt  # not a task's failure: it stops the campaign
+    return fly(scenario)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_a_campaign_stopped_by_ctrl_c_resumes_with_only_the_missing_tasks(tmp_path):
+    tasks = flights(6)
+    cached = dataclasses.replace(SERIAL, cache_dir=tmp_path)
+    INTERRUPTED_AT_SEED["seed"] = 4
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_campaign(fly_or_be_interrupted, tasks, "interrupted", cached)
+    finally:
+        INTERRUPTED_AT_SEED["seed"] = None
+    resumed = run_campaign(fly_or_be_interrupted, tasks, "resumed", cached)
+    assert (resumed.cached, resumed.computed) == (3, 3)  # seeds 1-3 kept, 4-6 flown
+    assert same(resumed.results, run_campaign(fly, tasks, "serial", SERIAL).results)
