@@ -45,9 +45,10 @@ def cluster(start_process):
                               "127.0.0.1", *LOOPBACK_DASHBOARD, "--name", f"worker{k}"],
                              f"dask_worker{k}") for k in (1, 2)]
     with Campaign(CampaignOptions(cluster=address, progress=False)) as campaign:
-        client = campaign.client()
-        client.wait_for_workers(2, timeout=60)
-    return address, workers
+        campaign.client().wait_for_workers(2, timeout=60)
+    yield address, workers
+    for process in [*workers, scheduler]:  # on SIGINT they linger, reconnecting: 16 s
+        process.stop(signal.SIGKILL)
 
 
 def slow_flight(scenario):
