@@ -18,10 +18,12 @@ GRAPH_POLL_S = 0.1
 # SETTLE_MIN_S: config/fastdds.xml makes every participant announce itself each 0.5 s, so a
 # participant that missed our initial announcements answers within about 0.5 s; measured
 # here (idle), the last change of the graph came 0.02-0.66 s after start, and with 0.6 s a
-# loaded test run once missed a node, hence two announcement periods. A `node list` takes
-# 1.5-1.7 s (Python and rclpy start-up: 0.45 s).
+# loaded test run once missed a node, hence two announcement periods. SETTLE_QUIET_S: longer
+# than one announcement period, so every live participant has announced itself within the
+# quiet time (with 0.3 s a loaded CI run's `node list` once missed a publishing node).
+# A `node list` takes 1.5-1.7 s (Python and rclpy start-up: 0.45 s).
 SETTLE_MIN_S = 1.0
-SETTLE_QUIET_S = 0.3
+SETTLE_QUIET_S = 0.6
 SETTLE_STEP_S = 0.02
 
 
