@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import cloudpickle
+import dask.config
 from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 from uav_common.package_data import share_dir
@@ -43,6 +44,16 @@ from uav_common.package_data import share_dir
 CODE_PACKAGES = ("uav_common", "uav_sim", "uav_fault_estimator")
 PICKLE_PROTOCOL = 5
 LOCALHOST = "127.0.0.1"
+# Local workers' housekeeping made rare: Dask's defaults (the event loop's health checked
+# every 20 ms, a sampling profiler every 10 ms, memory every 100 ms) share a worker's one
+# core with its flight; measured on 12 detectability flights on 2 workers: 1.62-1.77 times
+# the serial speed with the defaults, 1.89-1.90 with these.
+QUIET_WORKERS = {
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.profile.enabled": False,
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "5s",
+}
 PROGRESS_AFTER_S = 2.0  # a campaign shows its progress bar once it has run this long [s]
 
 
@@ -195,13 +206,14 @@ class Campaign:
 
     def client(self) -> Client:
         """The Dask client, connected at the first call: to the cluster the options name, or
-        to a LocalCluster of options.workers single-threaded processes, every port of it
-        (the dashboard's too) on 127.0.0.1."""
+        to a LocalCluster of options.workers single-threaded processes (QUIET_WORKERS),
+        every port of it (the dashboard's too) on 127.0.0.1."""
         if self._client is None:
             if self.options.cluster is not None:
                 self._client = self._stack.enter_context(
                     Client(self.options.cluster, timeout="30s"))
             else:
+                self._stack.enter_context(dask.config.set(QUIET_WORKERS))
                 cluster = self._stack.enter_context(LocalCluster(
                     n_workers=self.options.workers, threads_per_worker=1, processes=True,
                     host=LOCALHOST, dashboard_address=f"{LOCALHOST}:0",  # 127.0.0.1 alone
