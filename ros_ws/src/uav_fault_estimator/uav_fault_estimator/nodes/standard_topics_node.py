@@ -29,7 +29,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, NavSatFix, NavSatStatus
 from std_msgs.msg import Float64, Header
 from tf2_msgs.msg import TFMessage
-from uav_common.message_fields import stamp_nanoseconds, state_array
+from uav_common.message_fields import stamp_nanoseconds, stamp_seconds, state_array
 from uav_common.ros.node_tools import (
     OK,
     QOS_PARAMETER,
@@ -108,18 +108,18 @@ def fix_message(header: Header, state: StandardState) -> NavSatFix:
         position_covariance_type=NavSatFix.COVARIANCE_TYPE_UNKNOWN)
 
 
-def odometry_message(header: Header, body_frame: str, state: StandardState) -> Odometry:
+def odometry_message(header: Header, body_frame: str, pose: Pose,
+                     state: StandardState) -> Odometry:
     """nav_msgs/Odometry: pose of body_frame in map, twist in body_frame."""
     message = Odometry(header=header, child_frame_id=body_frame)
-    message.pose.pose = _pose(state)
+    message.pose.pose = pose
     message.twist.twist.linear = _vector3(state.velocity_flu_mps)
     message.twist.twist.angular = _vector3(state.angular_velocity_flu_radps)
     return message
 
 
-def transform_message(header: Header, body_frame: str, state: StandardState) -> TFMessage:
-    """/tf's map -> body_frame."""
-    pose = _pose(state)
+def transform_message(header: Header, body_frame: str, pose: Pose) -> TFMessage:
+    """/tf's map -> body_frame at pose."""
     transform = TransformStamped(header=header, child_frame_id=body_frame)
     transform.transform.translation = Vector3(x=pose.position.x, y=pose.position.y,
                                               z=pose.position.z)
@@ -182,21 +182,21 @@ class StandardTopicsNode(Node):
         self.counts["implausible_values"] += implausible + glitches
         if np.isfinite(state.position_enu_m).all() and np.isfinite(state.orientation_xyzw).all():
             map_header = Header(stamp=message.header.stamp, frame_id=MAP_FRAME)
-            self.publishers_["odom"].publish(odometry_message(map_header, self.body_frame, state))
-            self.publishers_["tf"].publish(transform_message(map_header, self.body_frame, state))
-            self.extend_track(map_header, state)
+            pose = _pose(state)
+            self.publishers_["odom"].publish(
+                odometry_message(map_header, self.body_frame, pose, state))
+            self.publishers_["tf"].publish(transform_message(map_header, self.body_frame, pose))
+            self.extend_track(map_header, state.time_s, pose)
         else:
             self.counts["without_pose"] += 1
         self.report(time_s)
 
-    def extend_track(self, header: Header, state: StandardState) -> None:
+    def extend_track(self, header: Header, time_s: float, pose: Pose) -> None:
         """A pose on the track every track_period_s of the state's time; published then."""
         poses = self.track.poses
-        if poses:
-            last = poses[-1].header.stamp
-            if state.time_s - (last.sec + last.nanosec / 1e9) < self.track_period_s:
-                return
-        poses.append(PoseStamped(header=header, pose=_pose(state)))
+        if poses and time_s - stamp_seconds(poses[-1].header.stamp) < self.track_period_s:
+            return
+        poses.append(PoseStamped(header=header, pose=pose))
         del poses[:-self.track_poses]
         self.track.header.stamp = header.stamp
         self.publishers_["track"].publish(self.track)
