@@ -34,11 +34,10 @@ def ros_domain(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
         lock.close()
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def campaign() -> Iterator[Campaign]:
-    """Flights of a test module on local worker processes, one per core (the calibrations'
-    and studies' own execution layer); closed after the module, so that no cluster's
-    threads and processes run beside the ROS tests that time discovery."""
+    """Flights of the session's tests on local worker processes, one per core, started once
+    (the calibrations' and studies' own execution layer)."""
     cloudpickle.register_pickle_by_value(helpers)  # not on the workers' path: sent along
     with Campaign(CampaignOptions(progress=False)) as session_campaign:
         yield session_campaign
