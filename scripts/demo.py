@@ -71,9 +71,17 @@ STALL_TIMEOUT_S = 60.0  # wall time without simulated time going on, once flying
 ESTIMATES_TIMEOUT_S = 30.0  # wall time for the last estimates after the simulator ended
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 STATE_SUBSCRIBERS = 3  # residual_node, detector_node and the recorder
-RECORDER_GRACE_S = 1.0  # for the recorder to take the last estimates, as this node did
+# Each node's output subscriptions before it takes its inputs: mhe_node and the recorder on
+# residuals, the recorder and the demo on the estimates, the recorder on the alarms.
+OUTPUT_SUBSCRIBERS = {"residual_node": 2, "mhe_node": 2, "detector_node": 1}
+RECORDER = "/recorder_node"  # its status on /diagnostics counts what it has recorded
 OUTPUT_MARK = ".uav-demo-run"  # in an output folder the demo made: its bag/ and logs/ are its own
 REPLACED = ("bag", "logs")  # what a run replaces of an earlier one in the same folder
+
+
+def subscribers_args(executable: str) -> list[str]:
+    """A node's --ros-args to take its inputs once its output has its subscribers."""
+    return ["-p", f"wait_for_subscribers:={OUTPUT_SUBSCRIBERS[executable]}"]
 
 
 class OutputFolderError(Exception):
@@ -118,9 +126,10 @@ class Progress:
 
     def __init__(self, vehicles: list[Vehicle]) -> None:
         import rclpy
+        from diagnostic_msgs.msg import DiagnosticArray
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
-        from uav_common.ros.node_tools import STREAM_QOS
+        from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
         from uav_fault_msgs.msg import FaultEstimate
 
         self._rclpy = rclpy
@@ -133,15 +142,24 @@ class Progress:
         self.executor.add_node(self.node)
         self.time_s = 0.0
         self.estimates = {vehicle.namespace: 0 for vehicle in vehicles}
+        self.recorded: dict[str, int] = {}  # the recorder's count of each topic so far
         for vehicle in vehicles:
             self.node.create_subscription(
                 FaultEstimate, vehicle.topic("faults/estimate"),
                 lambda message, key=vehicle.namespace: self._on_estimate(key, message),
                 STREAM_QOS)
+        self.node.create_subscription(DiagnosticArray, "/diagnostics", self._on_diagnostics,
+                                      DIAGNOSTICS_QOS)
 
     def _on_estimate(self, namespace: str, message: Any) -> None:
         self.estimates[namespace] += 1
         self.time_s = max(self.time_s, stamp_seconds(message.header.stamp))
+
+    def _on_diagnostics(self, message: Any) -> None:
+        for status in message.status:
+            if status.name == RECORDER:
+                self.recorded = {item.key: int(item.value) for item in status.values
+                                 if item.value.isdigit()}
 
     @property
     def received(self) -> int:
@@ -273,19 +291,22 @@ class Demo:
             raise StalledError(
                 f"recorder_node did not create {self.bag} in {STARTUP_TIMEOUT_S:g} s")
         for vehicle in self.vehicles:
+            # each node takes its inputs once its output has every subscriber (OUTPUT_
+            # SUBSCRIBERS), and each simulator starts once they take its state: then
+            # nothing the nodes publish can be missed
             self.start(vehicle, "uav_fault_estimator", "mhe_node",
                        (["--params-file", str(vehicle.mhe_params)] if vehicle.mhe_params else [])
-                       + self.model_args["mhe_node"])
+                       + self.model_args["mhe_node"] + subscribers_args("mhe_node"))
             self.start(vehicle, "uav_fault_estimator", "residual_node",
-                       self.model_args["residual_node"])
-            self.start(vehicle, "uav_fault_estimator", "detector_node", [])
-        # mhe_node and the recorder on residuals, the recorder and the demo on the estimates,
-        # the recorder on the alarms: then nothing the nodes publish can be missed
-        if not self.watch(lambda: all(
-                progress.subscriptions(vehicle.topic("residuals")) >= 2
-                and progress.subscriptions(vehicle.topic("faults/estimate")) >= 2
-                and progress.subscriptions(vehicle.topic("faults/alarm")) >= 1
-                for vehicle in self.vehicles), STARTUP_TIMEOUT_S):
+                       self.model_args["residual_node"] + subscribers_args("residual_node"))
+            self.start(vehicle, "uav_fault_estimator", "detector_node",
+                       subscribers_args("detector_node"))
+        outputs = {"residuals": "residual_node", "faults/estimate": "mhe_node",
+                   "faults/alarm": "detector_node"}
+        if not self.watch(lambda: all(  # as the demo sees the graph: to say so if not
+                progress.subscriptions(vehicle.topic(topic)) >= OUTPUT_SUBSCRIBERS[node]
+                for vehicle in self.vehicles for topic, node in outputs.items()),
+                STARTUP_TIMEOUT_S):
             raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
         started = time.monotonic()
         # the followers first: the first vehicle's simulator starts the clock
@@ -304,9 +325,13 @@ class Demo:
             print(f"demo: {progress.received} of {self.expected * len(self.vehicles)} "
                   f"estimates arrived within {ESTIMATES_TIMEOUT_S:g} s of the flight's end",
                   file=sys.stderr)
-        grace_end = time.monotonic() + RECORDER_GRACE_S  # for the recorder to take them too
-        self.watch(lambda: time.monotonic() > grace_end, RECORDER_GRACE_S + 1.0,
-                   finished=simulators)
+        # the recorder has them too (it says its counts on /diagnostics once a second)
+        if not self.watch(lambda: all(progress.recorded.get(v.topic("faults/estimate"), 0)
+                                      >= progress.estimates[v.namespace]
+                                      for v in self.flying()),
+                          ESTIMATES_TIMEOUT_S, finished=simulators):
+            print(f"demo: recorder_node did not say within {ESTIMATES_TIMEOUT_S:g} s that it "
+                  "had every estimate: the recording may lack the last ones", file=sys.stderr)
         self.report_progress(final=True)
         print(f"flown in {time.monotonic() - started:.1f} s of wall time", flush=True)
         return dict(progress.estimates)

@@ -29,6 +29,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.publisher import Publisher
 from rclpy.qos import (
     DurabilityPolicy,
     HistoryPolicy,
@@ -82,6 +83,36 @@ class ParameterSpec:
 
     def range_text(self) -> str:
         return "" if self.low is None or self.high is None else f"[{self.low:g}, {self.high:g}]"
+
+
+# Every stream node's `wait_for_subscribers` parameter (when_subscribed).
+WAIT_FOR_SUBSCRIBERS_PARAMETER = ParameterSpec(
+    "subscribe to the inputs only once the node's output has this many subscriptions, so "
+    "that nothing it publishes is lost to discovery; 0: at once", 0, 100)
+SUBSCRIPTION_POLL_S = 0.05  # wall time between looks at an output's subscription count
+
+
+def when_subscribed(node: Node, publisher: Publisher, wanted: int,
+                    subscribe: Callable[[], None]) -> None:
+    """Call subscribe() (the node's input subscriptions) once publisher has `wanted`
+    subscriptions as the publisher itself sees them (a listener's own view of the graph can
+    be ahead of the publisher's); at once when wanted is 0. The node spins meanwhile
+    (parameters, diagnostics), and its source (sim_node's wait_for_subscribers) waits in
+    turn for the subscriptions subscribe() makes: the whole chain is matched before the
+    first message."""
+    if publisher.get_subscription_count() >= wanted:
+        subscribe()
+        return
+    node.get_logger().info(
+        f"waiting for {wanted} subscription(s) of {publisher.topic_name} before subscribing")
+
+    def look() -> None:
+        if publisher.get_subscription_count() >= wanted:
+            node.destroy_timer(timer)
+            subscribe()
+
+    timer = node.create_timer(SUBSCRIPTION_POLL_S, look,
+                              clock=Clock(clock_type=ClockType.STEADY_TIME))
 
 
 # Every stream node's `qos` parameter (STREAM_QOS_PROFILES).
@@ -263,13 +294,17 @@ class Diagnostics:
     source's own time (clock_s: what it publishes on /clock [s]). A node driven by inputs
     (silent_after_s given) says at least WARN, with its last status's values, once it has had
     no update for that long. A node may add statuses of its own parts (update_part:
-    `<node>/<part>`, e.g. mhe_node's model_fit), published with its own.
+    `<node>/<part>`, e.g. mhe_node's model_fit), published with its own. A node whose status
+    is cheaper to take once per publication than per input gives before_publish, which
+    calls update().
     """
 
     def __init__(self, node: Node, period_s: float = 1.0,
                  silent_after_s: float | None = SILENT_INPUTS_S,
-                 clock_s: Callable[[], float] | None = None) -> None:
+                 clock_s: Callable[[], float] | None = None,
+                 before_publish: Callable[[], None] | None = None) -> None:
         self._node = node
+        self._before_publish = before_publish
         self._publisher = node.create_publisher(DiagnosticArray, "/diagnostics", DIAGNOSTICS_QOS)
         self._status = DiagnosticStatus(
             level=OK, name=node.get_fully_qualified_name(), message="starting",
@@ -296,6 +331,8 @@ class Diagnostics:
             values=[KeyValue(key=key, value=str(value)) for key, value in values.items()])
 
     def publish(self) -> None:
+        if self._before_publish is not None:
+            self._before_publish()
         status, silent_s = self._status, time.monotonic() - self._updated_s
         level, message = status.level, status.message
         if self._silent_after_s is not None and silent_s > self._silent_after_s:

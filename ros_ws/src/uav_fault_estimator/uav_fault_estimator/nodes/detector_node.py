@@ -27,11 +27,13 @@ from uav_common.ros.node_tools import (
     OK,
     QOS_PARAMETER,
     STREAM_QOS_PROFILES,
+    WAIT_FOR_SUBSCRIBERS_PARAMETER,
     WARN,
     Diagnostics,
     ParameterSpec,
     declare_parameters,
     run_node,
+    when_subscribed,
 )
 from uav_fault_msgs.msg import (
     AircraftState,
@@ -65,6 +67,7 @@ PARAMETERS = {
         "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds",
         1e-9, 0.5, live=True),
     "qos": QOS_PARAMETER,
+    "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
@@ -90,6 +93,7 @@ class DetectorNode(Node):
         self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,
                                       "generators reset to the calibration", qos,
                                       optional=OPTIONAL_STREAMS)
+        when_subscribed(self, self.publisher, p["wait_for_subscribers"], self.streams.subscribe)
         self.diagnostics = Diagnostics(self)
         self.counts = {"published": 0, "combined_alarms": 0}
 

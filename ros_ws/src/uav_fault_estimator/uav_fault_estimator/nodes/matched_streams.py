@@ -46,17 +46,17 @@ def guarded(node: Node, stream: GuardedStream, topic: str, stamp_ns: int, payloa
 
 
 class MatchedStreams:
-    """Subscribes each topic (with the node's stream qos) in the order given: sim_node's
-    wait_for_subscribers counts `state` subscriptions, so list `state` last. Complete sets
-    go to on_sample(time_s, arrays by topic) in stamp order, with the optional topics'
-    arrays where they came (waited for, for up to StampMatcher.optional_wait newer sets,
-    while the topic has a publisher or may still have messages queued). A required message
-    whose stamp is a stray (StampGuard: a duplicate, one going backwards or far ahead) is
-    dropped and counted; each required topic's stamps are guarded on their own (skew
-    between topics is no stray), a topic resuming after a gap is taken (said, counted in
-    `gaps`), and a restarted source (its stamps back, several in a row) is warned of
-    (ending with restart_note: what on_restart does), resets the matcher and every guard
-    and calls on_restart() first."""
+    """Subscribes each topic (with the node's stream qos) in the order given, on
+    subscribe(): sim_node's wait_for_subscribers counts `state` subscriptions, so list
+    `state` last. Complete sets go to on_sample(time_s, arrays by topic) in stamp order,
+    with the optional topics' arrays where they came (waited for, for up to
+    StampMatcher.optional_wait newer sets, while the topic has a publisher or may still have
+    messages queued). A required message whose stamp is a stray (StampGuard: a duplicate,
+    one going backwards or far ahead) is dropped and counted; each required topic's stamps
+    are guarded on their own (skew between topics is no stray), a topic resuming after a gap
+    is taken (said, counted in `gaps`), and a restarted source (its stamps back, several in
+    a row) is warned of (ending with restart_note: what on_restart does), resets the matcher
+    and every guard and calls on_restart() first."""
 
     def __init__(self, node: Node, streams: Streams,
                  on_sample: Callable[[float, dict[str, Any]], None],
@@ -78,10 +78,16 @@ class MatchedStreams:
         self.restarts = 0
         self.gaps = 0  # a required stream resumed after a silence (nothing reset)
         self.implausible_values = 0  # outside the aircraft's envelope: taken as missing
-        for topic, (message_type, *_) in {**optional, **streams}.items():
-            node.create_subscription(
+        self.qos = qos
+        self.message_types = {topic: message_type for topic, (message_type, *_)
+                              in {**optional, **streams}.items()}
+
+    def subscribe(self) -> None:
+        """Subscribe every topic, `state` last (when_subscribed calls it)."""
+        for topic, message_type in self.message_types.items():
+            self.node.create_subscription(
                 message_type, topic, lambda message, topic=topic: self.receive(topic, message),
-                qos)
+                self.qos)
 
     def plausible(self, topic: str, message: Any) -> np.ndarray:
         """The message as an array, values outside the aircraft's envelope or changed faster

@@ -22,12 +22,14 @@ from uav_common.ros.node_tools import (
     OK,
     QOS_PARAMETER,
     STREAM_QOS_PROFILES,
+    WAIT_FOR_SUBSCRIBERS_PARAMETER,
     WARN,
     Diagnostics,
     ParameterError,
     ParameterSpec,
     declare_parameters,
     run_node,
+    when_subscribed,
 )
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 
@@ -115,6 +117,7 @@ PARAMETERS = {
         "file for the last estimate: a restart within the flight (a first residual later "
         "than the saved one) starts from it; empty: none"),
     "qos": QOS_PARAMETER,
+    "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
 RECENT_SOLVES = 200  # solve times kept for the median and p99 on /diagnostics
 
@@ -136,7 +139,9 @@ class MheNode(Node):
         self.estimated = self.estimator.column_names  # faults, then any nuisance parameters
         qos = STREAM_QOS_PROFILES[self.parameters["qos"]]
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", qos)
-        self.create_subscription(Residuals, "residuals", self.on_residuals, qos)
+        when_subscribed(self, self.publisher, self.parameters["wait_for_subscribers"],
+                        lambda: self.create_subscription(
+                            Residuals, "residuals", self.on_residuals, qos))
         self.diagnostics = Diagnostics(self)
         self.model_fit = ModelFit(self.noise.calibration, self.parameters["model_fit_window_s"],
                                   self.parameters["model_fit_threshold_sigmas"], SETTLE_S)

@@ -4,16 +4,19 @@ Topics are discovered while the node runs and subscribed raw (no decoding), with
 reliability their publishers offer and keep-all history, so that a fast simulation loses
 nothing. Timestamps are the receive time on the node's clock: simulation time when started
 with use_sim_time (as demo.sh and bringup.sh start it), wall time otherwise. Each topic's
-publishers' QoS profiles go into metadata.yaml. On SIGINT the recording is closed properly;
-the per-topic counts are logged.
+publishers' QoS profiles go into metadata.yaml. Each topic's count so far is on /diagnostics.
+On SIGINT (or SIGTERM) the messages that had arrived are written, the recording is closed
+properly and the per-topic counts are logged.
 """
 
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 from rclpy.duration import Duration
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rclpy.topic_endpoint_info import TopicEndpointInfo
@@ -25,11 +28,21 @@ from rosbags.interfaces import (
     QosReliability,
     QosTime,
 )
-from uav_common.ros.node_tools import ParameterSpec, declare_parameters, run_node
+from uav_common.ros.node_tools import (
+    OK,
+    Diagnostics,
+    ParameterSpec,
+    declare_parameters,
+    run_node,
+    spin,
+)
 
 from uav_fault_estimator.nodes.raw_topics import RawTopics
 from uav_fault_estimator.recording.project_bag import Recording, project_typestore
 
+# Longest a stop waits while the recorder writes what had arrived [s, wall time]: a
+# backlog of a whole fast flight takes about a second.
+DRAIN_LIMIT_S = 10.0
 INFINITE_QOS_S, INFINITE_QOS_NS = 2147483647, 4294967295  # rosbag2's "infinite" duration
 PARAMETERS = {
     "output_dir": ParameterSpec("the rosbag2 directory to create (it must not exist yet)"),
@@ -73,6 +86,34 @@ class RecorderNode(Node):
         self.recording = Recording(output, project_typestore())
         self.topics = RawTopics(self, self.parameters["discovery_period_s"], self.add_topic,
                                 self.recording.write, purpose="recording")
+        self.diagnostics = Diagnostics(self, silent_after_s=None,
+                                       before_publish=self.report)
+
+    def report(self) -> None:
+        """Each topic's count of messages recorded so far, on /diagnostics (by topic name):
+        what a run's starter waits for before it stops the recorder."""
+        self.diagnostics.update(OK, f"recording {len(self.recording.counts)} topics",
+                                dict(sorted(self.recording.counts.items())))
+
+    def record_what_arrived(self) -> None:
+        """After a stop signal: write the messages that have already arrived, then stop
+        (a recorder behind a fast graph holds a backlog that a stop must not lose). Timers
+        first go, so that a look that takes no message means none is left; at most
+        DRAIN_LIMIT_S [s, wall time]."""
+        for timer in list(self.timers):
+            self.destroy_timer(timer)
+        executor = SingleThreadedExecutor()
+        executor.add_node(self)
+        deadline = time.monotonic() + DRAIN_LIMIT_S
+        try:
+            while time.monotonic() < deadline:
+                before = sum(self.recording.counts.values())
+                executor.spin_once(timeout_sec=0.0)
+                if sum(self.recording.counts.values()) == before:
+                    break
+        finally:
+            executor.remove_node(self)
+            executor.shutdown(timeout_sec=0.0)
 
     def add_topic(self, topic: str, message_type: str,
                   publishers: list[TopicEndpointInfo]) -> None:
@@ -89,8 +130,14 @@ class RecorderNode(Node):
         super().destroy_node()
 
 
+def record(node: RecorderNode) -> None:
+    """Spin until a stop signal, then record what had arrived by then."""
+    spin(node)
+    node.record_what_arrived()
+
+
 def main(args: list[str] | None = None) -> int:
-    return run_node("recorder_node", RecorderNode, args=args)
+    return run_node("recorder_node", RecorderNode, run=record, args=args)
 
 
 if __name__ == "__main__":

@@ -21,11 +21,13 @@ from uav_common.ros.node_tools import (
     OK,
     QOS_PARAMETER,
     STREAM_QOS_PROFILES,
+    WAIT_FOR_SUBSCRIBERS_PARAMETER,
     WARN,
     Diagnostics,
     ParameterSpec,
     declare_parameters,
     run_node,
+    when_subscribed,
 )
 from uav_common.sample_grid import GRID_TOLERANCE_S, next_grid_time
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
@@ -68,6 +70,7 @@ PARAMETERS = {
     "model_calibration_file": ParameterSpec(
         "model calibration YAML (scripts/calibrate_model.py); empty: aerosonde.xml as shipped"),
     "qos": QOS_PARAMETER,
+    "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
 # `state` last: see MatchedStreams
 STREAMS = {"controls": (ControlInputs, controls_array, CONTROL_LIMITS, None),
@@ -95,6 +98,7 @@ class ResidualNode(Node):
         self.publisher = self.create_publisher(Residuals, "residuals", qos)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset",
                                       qos, OPTIONAL_STREAMS)
+        when_subscribed(self, self.publisher, p["wait_for_subscribers"], self.streams.subscribe)
         self.diagnostics = Diagnostics(self)
         self.next_publish_s: float | None = None
         self.counts = {"samples": 0, "published": 0, "rejected_samples": 0,

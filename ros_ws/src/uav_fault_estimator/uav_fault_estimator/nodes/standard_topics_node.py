@@ -34,11 +34,13 @@ from uav_common.ros.node_tools import (
     OK,
     QOS_PARAMETER,
     STREAM_QOS_PROFILES,
+    WAIT_FOR_SUBSCRIBERS_PARAMETER,
     WARN,
     Diagnostics,
     ParameterSpec,
     declare_parameters,
     run_node,
+    when_subscribed,
 )
 from uav_fault_msgs.msg import AircraftState, FaultEstimate, FaultVector
 from uav_sim.envelope import STATE_LIMITS, gate, state_rate_gate
@@ -56,6 +58,7 @@ PARAMETERS = {
     "track_period_s": ParameterSpec("sim time between the track's poses [s]", 0.05, 60.0),
     "track_poses": ParameterSpec("poses the track keeps, the newest", 2, 100000),
     "qos": QOS_PARAMETER,
+    "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
 MAP_FRAME, BODY_FRAME = "map", "base_link"  # REP 105's names
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)  # tf2's own for /tf
@@ -151,12 +154,17 @@ class StandardTopicsNode(Node):
         self.fault_publishers: dict[str, object] = {}
         self.stream, self.rate_gate = GuardedStream(), state_rate_gate()
         self.counts = {"states": 0, "without_pose": 0, "implausible_values": 0, "restarts": 0}
+        when_subscribed(self, self.publishers_["odom"], p["wait_for_subscribers"],
+                        lambda: self.subscribe(qos))
+        self.diagnostics = Diagnostics(self)
+
+    def subscribe(self, qos: QoSProfile) -> None:
+        """The inputs: state, and the estimated and seeded faults."""
         self.create_subscription(AircraftState, "state", self.on_state, qos)
         self.create_subscription(FaultEstimate, "faults/estimate",
                                  lambda m: self.on_faults("estimate", m), qos)
         self.create_subscription(FaultVector, "faults/seeded",
                                  lambda m: self.on_faults("seeded", m), qos)
-        self.diagnostics = Diagnostics(self)
 
     def on_state(self, message: AircraftState) -> None:
         verdict, taken = guarded(self, self.stream, "state",
