@@ -4,7 +4,26 @@ message collection and publishing, in a context of its own."""
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
+
+
+@dataclass(frozen=True)
+class Waited:
+    """How a wait for a condition ended: true when the condition held in time. Its text
+    says what was waited for, so that `assert graph.wait_for_...(...)` says it on failure."""
+
+    met: bool
+    what: str
+    waited_s: float
+
+    def __bool__(self) -> bool:
+        return self.met
+
+    def __repr__(self) -> str:
+        verdict = "held" if self.met else "did NOT hold"
+        return f"<waited {self.waited_s:.1f} s for {self.what}: {verdict}>"
 
 
 class RosGraph:
@@ -30,14 +49,17 @@ class RosGraph:
     def topic_types(self) -> dict[str, list[str]]:
         return dict(self.node.get_topic_names_and_types())
 
-    def wait_for_topics(self, topics: list[str], timeout_s: float) -> bool:
+    def wait(self, what: str, condition: Callable[[], bool], timeout_s: float) -> Waited:
+        """Spin until condition() holds or timeout_s passes: a Waited, false (and saying what
+        was waited for, and how long) when the deadline passed first."""
+        started = time.monotonic()
+        self.spin(timeout_s, until=condition)
+        return Waited(bool(condition()), what, time.monotonic() - started)
+
+    def wait_for_topics(self, topics: list[str], timeout_s: float) -> Waited:
         """Whether every topic (absolute name) has appeared within timeout_s."""
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if set(topics) <= set(self.topic_types()):
-                return True
-            time.sleep(0.1)
-        return False
+        return self.wait(f"topics {topics} in the graph",
+                         lambda: set(topics) <= set(self.topic_types()), timeout_s)
 
     def subscribe(self, topics: dict[str, type], qos: Any = 10) -> dict[str, list[Any]]:
         """Start collecting every topic's messages into lists, filled while spin() runs."""
@@ -47,19 +69,19 @@ class RosGraph:
                 message_type, topic, received[topic].append, qos)
         return received
 
-    def wait_for_publishers(self, topic: str, count: int, timeout_s: float) -> bool:
+    def wait_for_publishers(self, topic: str, count: int, timeout_s: float) -> Waited:
         """Whether the subscription of topic (subscribe()) has been matched with at least
-        count publishers within timeout_s: from then on nothing they publish is missed."""
-        self.spin(timeout_s, until=lambda: self.subscriptions[topic].get_publisher_count()
-                  >= count)
-        return self.subscriptions[topic].get_publisher_count() >= count
+        count publishers within timeout_s (on this side: a publisher may match it a moment
+        later; a node's wait_for_subscribers waits on its own side)."""
+        return self.wait(f"{count} publisher(s) matched with this test's {topic}",
+                         lambda: self.subscriptions[topic].get_publisher_count() >= count,
+                         timeout_s)
 
-    def wait_for_subscribers(self, topic: str, count: int, timeout_s: float) -> bool:
+    def wait_for_subscribers(self, topic: str, count: int, timeout_s: float) -> Waited:
         """Whether the graph holds at least count subscriptions of topic (absolute name, this
-        node's own included) within timeout_s: a recorder that subscribes once a topic has a
-        publisher is in the graph before the first message is sent."""
-        self.spin(timeout_s, until=lambda: self.node.count_subscribers(topic) >= count)
-        return self.node.count_subscribers(topic) >= count
+        node's own included) within timeout_s, as this node sees the graph."""
+        return self.wait(f"{count} subscription(s) of {topic} in the graph",
+                         lambda: self.node.count_subscribers(topic) >= count, timeout_s)
 
     def spin(self, duration_s: float, until: Any = None) -> None:
         """Process callbacks for duration_s, or until until() is true."""

@@ -49,9 +49,11 @@ def test_sim_node_publishes_every_stream_at_the_rate_and_ends(
     sim = start_process(sim_argv(scenario, real_time_factor), "sim_node")
     expected = int(DURATION_S * RATE_HZ) + 1
     graph.spin(60.0, until=lambda: not sim.running())
-    graph.spin(1.0)  # the last messages in flight
     assert sim.wait(timeout_s=10) == 0, sim.output()
     assert "finished at 10 s of simulation time" in sim.output()
+    # the last messages may still be on their way
+    graph.spin(10.0, until=lambda: all(len(messages) >= expected
+                                       for messages in received.values()))
     for topic, messages in received.items():
         stamps = [stamp_seconds(message.header.stamp) for message in messages]
         print(f"{topic}: {len(stamps)} messages, stamps {stamps[0]:.2f} .. {stamps[-1]:.2f} s")
@@ -81,10 +83,11 @@ def test_without_air_data_on_board_no_air_data_is_published(short_scenario, grap
     graph.spin(60.0, until=lambda: received["/state"])
     publishers = {topic: graph.node.count_publishers(topic) for topic in ("/state", "/air_data")}
     graph.spin(60.0, until=lambda: not sim.running())
-    graph.spin(1.0)
     assert sim.wait(timeout_s=10) == 0, sim.output()
+    expected = int(3.0 * RATE_HZ) + 1
+    graph.spin(10.0, until=lambda: len(received["/state"]) >= expected)  # the last ones
     assert publishers == {"/state": 1, "/air_data": 0}
-    assert len(received["/state"]) == int(3.0 * RATE_HZ) + 1
+    assert len(received["/state"]) == expected
     assert received["/air_data"] == []
 
 
@@ -114,17 +117,20 @@ def test_a_simulator_on_sim_time_follows_the_clock_and_ends_when_it_stops(
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
         "-p", f"scenario:={short_scenario(DURATION_S)}", "-p", "use_sim_time:=true",
         "-p", "clock_stall_s:=2.0", "-p", "wait_for_subscribers:=1"]), "sim_node")
+    # the simulator's /clock subscription matched with this test's clock, as the clock
+    # sees it, and the simulator waiting for this test's state subscription
+    assert graph.wait("the simulator subscribed to this test's /clock",
+                      lambda: clock.get_subscription_count() >= 1, timeout_s=30), sim.output()
     assert graph.wait_for_publishers("/state", 1, timeout_s=30)
-    graph.spin(1.0)  # discovery settles in the simulator too
     assert graph.node.count_publishers("/clock") == 1  # this test's: the simulator follows
     for step in range(1, 41):  # the clock to 2 s, then no more
         clock_s = step / RATE_HZ
         clock.publish(Clock(clock=Time(sec=int(clock_s), nanosec=round(clock_s % 1 * 1e9))))
         graph.spin(0.02)
-    graph.spin(2.0)
+    assert sim.wait(timeout_s=30) == 2, sim.output()
+    graph.spin(10.0, until=lambda: len(states) >= 41)  # the last ones may be on their way
     stamps = [stamp_seconds(message.header.stamp) for message in states]
     print(f"{len(stamps)} states, the last at {stamps[-1]} s")
     assert stamps == pytest.approx([k / RATE_HZ for k in range(41)])
-    assert sim.wait(timeout_s=30) == 2, sim.output()
     assert ("the /clock it follows stood still at 2 s for 2 s of wall time, before this "
             "scenario's end at 10 s") in sim.output()

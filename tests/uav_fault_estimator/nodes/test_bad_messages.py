@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from helpers.diagnostics import latest_status, latest_values
 from helpers.flight_replay import FlightSample, Replayer, simulated_flight
 from helpers.flight_replay import message as simulated_message
 from uav_common.channels import STATE_CHANNELS
@@ -30,10 +31,13 @@ RATES = [STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw
 
 
 def start_pair(start_process, graph, node: str = "residual_node",
-               output: tuple[str, type] = ("residuals", Residuals)):
+               output: tuple[str, type] = ("residuals", Residuals), subscribers: int = 1):
     """The node in the clean and the disturbed namespace; their outputs, the diagnostics
-    and a replayer into both."""
-    parameters = ["-p", f"recovery_s:={RECOVERY_S}"] if node == "residual_node" else []
+    and a replayer into both. Each node subscribes to its inputs once its output has
+    `subscribers` subscriptions (this test's, and any started before)."""
+    parameters = ["-p", f"wait_for_subscribers:={subscribers}"]
+    if node == "residual_node":
+        parameters += ["-p", f"recovery_s:={RECOVERY_S}"]
     for namespace in (CLEAN, DIRTY):
         start_process(ros2_run_argv(
             "uav_fault_estimator", node, ros_args=["-r", f"__ns:={namespace}", *parameters]),
@@ -50,17 +54,14 @@ def start_pair(start_process, graph, node: str = "residual_node",
     return received[f"{CLEAN}/{topic}"], received[f"{DIRTY}/{topic}"], diagnostics, replayer
 
 
-def latest_status(diagnostics: list[DiagnosticArray], node: str) -> DiagnosticStatus | None:
-    for array in reversed(diagnostics):
-        for status in array.status:
-            if status.name == node:
-                return status
-    return None
-
-
-def latest_values(diagnostics: list[DiagnosticArray], node: str) -> dict[str, str]:
-    status = latest_status(diagnostics, node)
-    return {item.key: item.value for item in status.values} if status else {}
+def counted_health(graph, diagnostics: list[DiagnosticArray], node: str,
+                   published: int) -> dict[str, str]:
+    """node's values on /diagnostics once they count every message it published (its
+    status comes once a second: the first after the flight may be from before its end)."""
+    assert graph.wait(f"{node}'s /diagnostics counting {published} published", lambda:
+                      latest_values(diagnostics, node).get("published") == str(published),
+                      timeout_s=10)
+    return latest_values(diagnostics, node)
 
 
 def by_stamp(messages: list) -> dict[float, object]:
@@ -93,7 +94,7 @@ def test_implausible_values_are_missing_values_and_the_residuals_come_back(
     replayer.play(flight, CLEAN, DIRTY, corrupt)
     expected = round(duration_s / PERIOD_S)  # one residual every 0.5 s from 0.5 s on
     graph.spin(30.0, until=lambda: len(clean) >= expected and len(dirty) >= expected)
-    graph.spin(2.0, until=lambda: latest_values(diagnostics, "/dirty/residual_node").get(
+    graph.spin(10.0, until=lambda: latest_values(diagnostics, "/dirty/residual_node").get(
         "implausible_values") == "80")
     print(f"{len(clean)} clean and {len(dirty)} disturbed residuals")
     clean_at, dirty_at = by_stamp(clean), by_stamp(dirty)
@@ -144,7 +145,7 @@ def test_stray_stamps_are_dropped_and_change_nothing(graph, start_process):
     replayer.play(flight, CLEAN, DIRTY, corrupt)
     expected = round(duration_s / PERIOD_S)
     graph.spin(30.0, until=lambda: len(clean) >= expected and len(dirty) >= expected)
-    graph.spin(2.0, until=lambda: latest_values(diagnostics, "/dirty/residual_node").get(
+    graph.spin(10.0, until=lambda: latest_values(diagnostics, "/dirty/residual_node").get(
         "stray_stamps") == "9")
     clean_at, dirty_at = by_stamp(clean), by_stamp(dirty)
     print(f"{len(clean)} clean and {len(dirty)} disturbed residuals")
@@ -184,7 +185,7 @@ def test_absurd_body_rates_leave_the_detector_as_it_was(graph, start_process):
     replayer.play(flight, CLEAN, DIRTY, corrupt)
     expected = round(duration_s / 0.2)  # 5 Hz from 0.2 s on (the first sample has no r[k-1])
     graph.spin(30.0, until=lambda: len(clean) >= expected and len(dirty) >= expected - 4)
-    graph.spin(2.0, until=lambda: latest_values(diagnostics, "/dirty/detector_node").get(
+    graph.spin(10.0, until=lambda: latest_values(diagnostics, "/dirty/detector_node").get(
         "implausible_values") == "30")
     clean_at, dirty_at = by_stamp(clean), by_stamp(dirty)
     print(f"{len(clean)} clean and {len(dirty)} disturbed alarm messages")
@@ -233,8 +234,7 @@ def test_a_stream_running_ahead_of_the_others_changes_nothing(graph, start_proce
     assert len(clean_at) == expected and sorted(dirty_at) == sorted(clean_at)
     for stamp_s, expected_message in clean_at.items():
         assert np.array_equal(dirty_at[stamp_s].residual, expected_message.residual), stamp_s
-    graph.spin(3.0)
-    health = latest_values(diagnostics, "/dirty/residual_node")
+    health = counted_health(graph, diagnostics, "/dirty/residual_node", len(dirty))
     assert health["stamp_resets"] == "0" and health["stray_stamps"] == "0"
 
 
@@ -272,8 +272,7 @@ def test_a_silent_air_data_publisher_is_waited_for_once_then_flown_without(graph
     for t in (t for t in differences if t >= 31.0 and t + TAU_A_S in differences):
         assert differences[t + TAU_A_S] <= 1.1 * math.exp(-1.0) * differences[t], t
     assert max(d for t, d in differences.items() if t >= 30.0 + 7 * TAU_A_S) < 1e-3
-    graph.spin(3.0)
-    health = latest_values(diagnostics, "/dirty/residual_node")
+    health = counted_health(graph, diagnostics, "/dirty/residual_node", len(dirty))
     assert health["stamp_resets"] == "0"
 
 
@@ -290,14 +289,11 @@ def test_one_glitch_inside_the_envelope_moves_no_estimate(graph, start_process):
     estimates = graph.subscribe({f"{CLEAN}/faults/estimate": FaultEstimate,
                                  f"{DIRTY}/faults/estimate": FaultEstimate}, STREAM_QOS)
     for namespace in (CLEAN, DIRTY):
-        start_process(ros2_run_argv("uav_fault_estimator", "mhe_node",
-                                    ros_args=["-r", f"__ns:={namespace}"]),
-                      f"mhe_node{namespace.replace('/', '_')}")
-    _, _, diagnostics, replayer = start_pair(start_process, graph)
-    for namespace in (CLEAN, DIRTY):
-        assert graph.wait_for_publishers(f"{namespace}/faults/estimate", 1, timeout_s=30)
-        assert graph.wait_for_subscribers(f"{namespace}/residuals", 2, timeout_s=30)
-    graph.spin(1.0)
+        start_process(ros2_run_argv("uav_fault_estimator", "mhe_node", ros_args=[
+            "-r", f"__ns:={namespace}", "-p", "wait_for_subscribers:=1"]),
+            f"mhe_node{namespace.replace('/', '_')}")
+    # residuals to this test and to mhe_node
+    _, _, diagnostics, replayer = start_pair(start_process, graph, subscribers=2)
 
     def corrupt(sample: FlightSample, topic: str, values: np.ndarray):
         if topic == "state" and abs(sample.time_s - glitch_s) < 1e-9:
@@ -317,5 +313,6 @@ def test_one_glitch_inside_the_envelope_moves_no_estimate(graph, start_process):
           f"(at {max(moved, key=moved.get)} s); final clean "
           f"{np.round(clean_at[duration_s].values_pct, 2)} %")
     assert max(moved.values()) <= 0.5
-    graph.spin(3.0)
-    assert latest_values(diagnostics, "/dirty/residual_node")["implausible_values"] == "1"
+    residuals = round(duration_s / PERIOD_S)
+    assert counted_health(graph, diagnostics, "/dirty/residual_node", residuals)[
+        "implausible_values"] == "1"

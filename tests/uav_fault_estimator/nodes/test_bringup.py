@@ -73,7 +73,9 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
                              scenarios[1], "--params", str(fast), "--logs", str(logs)],
                             "bringup")
     assert bringup.wait(60) == 0, bringup.output()
-    graph.spin(5.0)  # the last estimates may still be on their way
+    assert graph.wait("the estimates at 10 s of both aircraft", lambda: all(  # may be on
+        received and stamp_seconds(received[-1].header.stamp) >= 10.0  # their way still
+        for received in estimates.values()), timeout_s=30)
     output = bringup.output()
     print(output)
     assert "every sim_node finished its scenario" in output

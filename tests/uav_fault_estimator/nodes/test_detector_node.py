@@ -41,8 +41,8 @@ def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, st
     calibration_file.write_text(yaml.safe_dump(calibration_to_dict(calibration), sort_keys=False))
     alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=[
-        "-p", f"calibration_file:={calibration_file}"]), "detector_node")
-    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
+        "-p", f"calibration_file:={calibration_file}",
+        "-p", "wait_for_subscribers:=1"]), "detector_node")  # inputs once this test listens
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
         scenario, subscribers=1)), "sim_node")
     assert sim.wait(timeout_s=90) == 0, sim.output()

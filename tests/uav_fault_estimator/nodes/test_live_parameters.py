@@ -47,8 +47,8 @@ def test_mhe_node_takes_a_new_noise_factor_and_refuses_an_r_of_the_wrong_length(
 def test_a_new_false_alarm_probability_gives_the_next_alarms_its_thresholds(
         short_scenario, start_process, graph):
     alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
-    start_process(ros2_run_argv("uav_fault_estimator", "detector_node"), "detector_node")
-    assert graph.wait_for_publishers("/faults/alarm", 1, timeout_s=30)
+    start_process(ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=[
+        "-p", "wait_for_subscribers:=1"]), "detector_node")  # inputs once this test listens
     assert param_set("/detector_node", "false_alarm_probability", "0.00001") == (
         "Set parameter successful")
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(

@@ -9,6 +9,8 @@ import subprocess
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
+from helpers.diagnostics import latest_values
+from rclpy.event_handler import PublisherEventCallbacks
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.messages import BODY_FRAME, header
@@ -32,14 +34,12 @@ def test_estimates_follow_the_residuals_and_find_a_lift_loss(short_scenario, gra
                                                              start_process):
     received = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)
     estimates = received["/faults/estimate"]
-    start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
-    start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
-    # residual_node's publisher known in the graph (mhe_node matches it about when this
-    # node does) before the flight starts: else the first residuals may find no subscriber
-    graph.subscribe({"/residuals": Residuals}, STREAM_QOS)
-    assert graph.wait_for_publishers("/residuals", 1, timeout_s=30)
-    graph.spin(1.0)
+    # each node subscribes to its inputs once its output is matched: residual_node's with
+    # mhe_node, mhe_node's with this test; sim_node flies once residual_node listens
+    start_process(ros2_run_argv("uav_fault_estimator", "mhe_node",
+                                ros_args=["-p", "wait_for_subscribers:=1"]), "mhe_node")
+    start_process(ros2_run_argv("uav_fault_estimator", "residual_node",
+                                ros_args=["-p", "wait_for_subscribers:=1"]), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
         scenario, subscribers=1)), "sim_node")
@@ -106,7 +106,25 @@ class SyntheticResiduals:
                                          STREAM_QOS)["/faults/estimate"]
         self.diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
                                            DIAGNOSTICS_QOS)["/diagnostics"]
-        self.publisher = graph.node.create_publisher(Residuals, "/residuals", STREAM_QOS)
+        self.graph = graph
+        self.matched_total = 0  # subscriptions ever matched with the publisher
+        self.publisher = graph.node.create_publisher(
+            Residuals, "/residuals", STREAM_QOS,
+            event_callbacks=PublisherEventCallbacks(matched=self._on_matched))
+
+    def _on_matched(self, info) -> None:
+        self.matched_total = info.total_count
+
+    def start_mhe_node(self, start_process, name: str, ros_args: tuple[str, ...] = ()):
+        """mhe_node as a process, once it listens to this publisher: it subscribes once its
+        estimates are matched with this test's subscription, and the publisher counts a new
+        match (not a killed node's subscription, which may still count for a while)."""
+        before = self.matched_total
+        node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node", ros_args=[
+            "-p", "wait_for_subscribers:=1", *ros_args]), name)
+        assert self.graph.wait(f"{name} subscribed to this test's /residuals",
+                               lambda: self.matched_total > before, timeout_s=30), node.output()
+        return node
 
     def message(self, k: int, faults_pct: tuple[float, ...] = (5.0, 0.0, 0.0, 0.0)
                 ) -> Residuals:
@@ -120,11 +138,13 @@ class SyntheticResiduals:
                          sensitivity=self.sensitivity.ravel().tolist())
 
     def node_values(self) -> dict[str, str]:
-        """The values of mhe_node's last status on /diagnostics."""
-        values = [{item.key: item.value for item in status.values}
-                  for array in self.diagnostics for status in array.status
-                  if status.name == "/mhe_node"]
-        return values[-1] if values else {}
+        """The values of mhe_node's last status on /diagnostics, once it counts an update for
+        every estimate received (it is published once a second)."""
+        assert self.graph.wait(
+            f"mhe_node's /diagnostics counting {len(self.estimates)} updates",
+            lambda: latest_values(self.diagnostics, "/mhe_node").get("updates")
+            == str(len(self.estimates)), timeout_s=10)
+        return latest_values(self.diagnostics, "/mhe_node")
 
 
 @pytest.mark.timeout(120)
@@ -137,8 +157,7 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
     running and ends at the lift loss."""
     synthetic = SyntheticResiduals(graph, seed=3)
     estimates = synthetic.estimates
-    node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+    node = synthetic.start_mhe_node(start_process, "mhe_node")
     bad_source, huge_s, count = 20, 30, 60
     for k in range(1, count + 1):
         message = synthetic.message(k)
@@ -167,8 +186,7 @@ def test_an_air_data_loss_holds_the_estimate_until_f_a_has_settled(graph, start_
     counted on /diagnostics; then estimated again."""
     synthetic = SyntheticResiduals(graph, seed=5)
     estimates = synthetic.estimates
-    node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+    node = synthetic.start_mhe_node(start_process, "mhe_node")
     lost, count = range(41, 51), 90
     for k in range(1, count + 1):
         message = synthetic.message(k)
@@ -197,8 +215,7 @@ def test_a_gap_in_the_residuals_keeps_the_diagnosis(graph, start_process):
     every residual sent gets its estimate."""
     synthetic = SyntheticResiduals(graph, seed=4)
     estimates = synthetic.estimates
-    node = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
+    node = synthetic.start_mhe_node(start_process, "mhe_node")
     sent = [*range(1, 41), *range(81, 121)]  # 0.5-20 s, then 40.5-60 s
     for count, k in enumerate(sent, start=1):
         synthetic.publisher.publish(synthetic.message(k))
@@ -222,21 +239,14 @@ def test_a_restarted_mhe_node_starts_from_its_last_estimate(graph, start_process
     started again: its first estimate is the one it had, not the prior (0 %); a flight
     that starts again (stamps from 0.5 s, fault-free) starts from the prior, and says so."""
     synthetic = SyntheticResiduals(graph, seed=5)
-    estimates, diagnostics = synthetic.estimates, synthetic.diagnostics
-    argv = ros2_run_argv("uav_fault_estimator", "mhe_node",
-                         ros_args=["-p", f"state_file:={tmp_path / 'mhe.json'}"])
+    estimates = synthetic.estimates
+    state_file = ("-p", f"state_file:={tmp_path / 'mhe.json'}")
 
 
     def fly(name: str, steps: range, faults_pct: tuple[float, ...] = (5.0, 0.0, 0.0, 0.0)
             ) -> tuple[list[FaultEstimate], str]:
-        """Start the node, wait for its first status (a killed one's subscription may still
-        count for a while), send the residuals, kill it; its estimates and its log."""
-        diagnostics.clear()
-        node = start_process(argv, name)
-        assert graph.wait_for_subscribers("/residuals", 1, timeout_s=30)
-        graph.spin(30.0, until=lambda: any(status.name == "/mhe_node" for array in diagnostics
-                                           for status in array.status))
-        graph.spin(0.5)
+        """Start the node, send the residuals, kill it; its estimates and its log."""
+        node = synthetic.start_mhe_node(start_process, name, state_file)
         estimates.clear()
         for count, k in enumerate(steps, start=1):
             synthetic.publisher.publish(synthetic.message(k, faults_pct))

@@ -9,8 +9,10 @@ import subprocess
 import sys
 
 import pytest
+from diagnostic_msgs.msg import DiagnosticArray
+from helpers.diagnostics import recorded_count
 from helpers.repo import SCRIPTS
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_msgs.msg import FaultEstimate
 
@@ -27,26 +29,27 @@ def test_a_namespaced_run_is_reported_with_its_namespace(short_scenario, start_p
                                                          tmp_path, graph):
     estimates = graph.subscribe({f"{NAMESPACE}/faults/estimate": FaultEstimate}, STREAM_QOS)[
         f"{NAMESPACE}/faults/estimate"]
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray}, DIAGNOSTICS_QOS)[
+        "/diagnostics"]
     bag = tmp_path / "flight"
     recorder = start_process(ros2_run_argv("uav_fault_estimator", "recorder_node", ros_args=[
         "-p", f"output_dir:={bag}"]), "recorder_node")
     assert wait_until(lambda: bag.exists() or not recorder.running(), timeout_s=30)
     in_namespace = ["-r", f"__ns:={NAMESPACE}"]
-    start_process(ros2_run_argv("uav_fault_estimator", "mhe_node", ros_args=in_namespace),
-                  "mhe_node")
-    assert graph.wait_for_publishers(f"{NAMESPACE}/faults/estimate", 1, timeout_s=30)
-    # this test's subscription and the recorder's, before the first estimate
-    assert graph.wait_for_subscribers(f"{NAMESPACE}/faults/estimate", 2, timeout_s=30)
-    start_process(ros2_run_argv("uav_fault_estimator", "residual_node",
-                                ros_args=in_namespace), "residual_node")
-    # mhe_node's subscription and the recorder's, before the first residual
-    assert graph.wait_for_subscribers(f"{NAMESPACE}/residuals", 2, timeout_s=30)
+    # each node subscribes to its inputs once its output has every subscription: this
+    # test's and the recorder's estimates, mhe_node's and the recorder's residuals
+    for name in ("mhe_node", "residual_node"):
+        start_process(ros2_run_argv("uav_fault_estimator", name, ros_args=[
+            *in_namespace, "-p", "wait_for_subscribers:=2"]), name)
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=[
         *in_namespace, *fast_flight_ros_args(short_scenario(DURATION_S), subscribers=2)]),
         "sim_node")
     assert sim.wait(timeout_s=90) == 0, sim.output()
     expected = round(DURATION_S / 0.5)
-    graph.spin(30.0, until=lambda: len(estimates) >= expected)
+    topic = f"{NAMESPACE}/faults/estimate"
+    assert graph.wait(f"{expected} estimates here and in the recording", lambda: len(
+        estimates) >= expected and recorded_count(diagnostics, topic) >= expected,
+        timeout_s=30)
     assert recorder.stop(signal.SIGINT) == 0, recorder.output()
 
     out = tmp_path / "report"

@@ -11,9 +11,11 @@ import sys
 import numpy as np
 import pytest
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray
+from helpers.diagnostics import recorded_count
 from helpers.repo import SCRIPTS
 from uav_common.channels import PAPER_FAULT_NAMES
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_estimator.detection.calibration_file import calibration_from_dict
 from uav_fault_estimator.offline import fly_on_grid
@@ -40,17 +42,18 @@ LIFT_LOSS = {"name": "left_wing_lift_loss", "start_s": 15, "ramp_s": 0, "magnitu
 def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_path, graph):
     estimates = graph.subscribe({"/faults/estimate": FaultEstimate}, STREAM_QOS)[
         "/faults/estimate"]
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray}, DIAGNOSTICS_QOS)[
+        "/diagnostics"]
     bag = tmp_path / "flight"
     recorder = start_process(ros2_run_argv("uav_fault_estimator", "recorder_node", ros_args=[
         "-p", f"output_dir:={bag}"]), "recorder_node")
     assert wait_until(lambda: bag.exists() or not recorder.running(), timeout_s=30)
-    start_process(ros2_run_argv("uav_fault_estimator", "mhe_node"), "mhe_node")
-    assert graph.wait_for_publishers("/faults/estimate", 1, timeout_s=30)
-    # this test's subscription and the recorder's, before the first estimate
-    assert graph.wait_for_subscribers("/faults/estimate", 2, timeout_s=30)
-    start_process(ros2_run_argv("uav_fault_estimator", "residual_node"), "residual_node")
-    # mhe_node's subscription and the recorder's, before the first residual
-    assert graph.wait_for_subscribers("/residuals", 2, timeout_s=30)
+    # each node subscribes to its inputs once its output has every subscription: this
+    # test's and the recorder's estimates, mhe_node's and the recorder's residuals
+    start_process(ros2_run_argv("uav_fault_estimator", "mhe_node", ros_args=[
+        "-p", "wait_for_subscribers:=2"]), "mhe_node")
+    start_process(ros2_run_argv("uav_fault_estimator", "residual_node", ros_args=[
+        "-p", "wait_for_subscribers:=2"]), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
     sim = start_process(ros2_run_argv("uav_sim", "sim_node", ros_args=fast_flight_ros_args(
         scenario, subscribers=2)), "sim_node")  # residual_node and the recorder
@@ -59,7 +62,9 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     typestore = project_typestore()
 
     # the last estimates may still be on their way when the simulator ends
-    graph.spin(30.0, until=lambda: len(estimates) >= expected)
+    assert graph.wait(f"{expected} estimates here and in the recording", lambda: len(
+        estimates) >= expected and recorded_count(diagnostics, "/faults/estimate") >= expected,
+        timeout_s=30)
     assert recorder.stop(signal.SIGINT) == 0, recorder.output()
 
     messages = read_topics(bag, typestore, (*report.TOPICS, *figures.TOPICS))

@@ -44,8 +44,9 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray},
                                   DIAGNOSTICS_QOS)["/diagnostics"]
     residual_node = start_process(
-        ros2_run_argv("uav_fault_estimator", "residual_node",
-                      ros_args=["-p", f"recovery_s:={RECOVERY_S}"]),
+        ros2_run_argv("uav_fault_estimator", "residual_node",  # inputs once we listen
+                      ros_args=["-p", f"recovery_s:={RECOVERY_S}", "-p",
+                                "wait_for_subscribers:=1"]),
         "residual_node",
     )
     assert graph.wait_for_publishers("/residuals", 1, timeout_s=30)

@@ -13,7 +13,11 @@ import signal
 import subprocess
 
 import pytest
-from uav_common.ros_processes import ros2_run_argv, stop_all, wait_until
+from diagnostic_msgs.msg import DiagnosticArray
+from helpers.diagnostics import recorded_count
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+from uav_common.ros_processes import ros2_run_argv, stop_all
+from uav_fault_msgs.msg import AircraftState
 
 pytestmark = pytest.mark.integration
 
@@ -22,6 +26,8 @@ pytestmark = pytest.mark.integration
 SIGINT_IGNORED = ["bash", "-c", 'trap "" INT; exec "$@"', "bash"]
 REAL_TIME_FACTOR = 20.0  # the default 300 s scenario takes 15 s of wall time: mid-flight
 CLOSED = re.compile(r"recording closed in \S+: (.*)")
+CHAIN = ("/state", "/residuals", "/faults/estimate", "/faults/alarm")  # sim to estimates
+STATES_PER_S = 20  # sim_node's default sensor rate [Hz]
 
 
 def sim_argv(subscribers: int) -> list[str]:
@@ -47,13 +53,13 @@ def test_the_wrapper_starts_a_command_with_sigint_ignored():
 @pytest.mark.parametrize(("sig", "ignore_sigint"), [
     (signal.SIGINT, True), (signal.SIGINT, False), (signal.SIGTERM, False),
     (signal.SIGTERM, True)])
-def test_sim_node_mid_flight_ends_cleanly(start_process, sig, ignore_sigint):
+def test_sim_node_mid_flight_ends_cleanly(start_process, graph, sig, ignore_sigint):
+    states = graph.subscribe({"/state": AircraftState}, STREAM_QOS)["/state"]
     prefix = SIGINT_IGNORED if ignore_sigint else []
-    sim = start_process(prefix + sim_argv(subscribers=0), "sim_node")
-    assert wait_until(lambda: flying(sim) or not sim.running(), timeout_s=40), sim.output()
-    assert sim.running(), sim.output()
-    wait_until(lambda: False, timeout_s=2.0)  # publishing at full rate
-    assert flying(sim), sim.output()
+    sim = start_process(prefix + sim_argv(subscribers=1), "sim_node")  # once we listen
+    assert graph.wait("a second of flight published", lambda: len(states) >= STATES_PER_S
+                      or not sim.running(), timeout_s=40), sim.output()
+    assert sim.running() and flying(sim), sim.output()
     status = sim.stop(sig)
     output = sim.output()
     print(output)
@@ -65,9 +71,12 @@ def test_sim_node_mid_flight_ends_cleanly(start_process, sig, ignore_sigint):
 @pytest.mark.slow
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
-def test_the_whole_graph_started_in_the_background_ends_cleanly(start_process, tmp_path, sig):
+def test_the_whole_graph_started_in_the_background_ends_cleanly(start_process, graph,
+                                                                tmp_path, sig):
     """Every node of the main job, SIGINT ignored as `&` leaves it, stopped while messages
     flow between them: status 0 each, no traceback, the recording closed with messages."""
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray}, DIAGNOSTICS_QOS)[
+        "/diagnostics"]
     bag = tmp_path / "bag"
     nodes = {
         name: start_process(SIGINT_IGNORED + ros2_run_argv(
@@ -77,8 +86,10 @@ def test_the_whole_graph_started_in_the_background_ends_cleanly(start_process, t
     # state subscribers: residual_node, detector_node, recorder_node
     nodes["sim_node"] = start_process(SIGINT_IGNORED + sim_argv(subscribers=3), "sim_node")
     sim = nodes["sim_node"]
-    assert wait_until(lambda: (bag.exists() and flying(sim)) or not sim.running(), timeout_s=60)
-    wait_until(lambda: False, timeout_s=5.0)  # some flight: residuals, estimates, alarms
+    # stopped once messages have flowed along the whole chain into the recording
+    assert graph.wait(f"messages of {CHAIN} in the recording", lambda: all(
+        recorded_count(diagnostics, topic) > 0 for topic in CHAIN) or not sim.running(),
+        timeout_s=60)
     assert all(node.running() for node in nodes.values()), {
         name: node.output() for name, node in nodes.items() if not node.running()}
     assert flying(sim), sim.output()
@@ -94,6 +105,6 @@ def test_the_whole_graph_started_in_the_background_ends_cleanly(start_process, t
     assert closed, outputs["recorder_node"]
     counts = dict(re.findall(r"(\S+) (\d+)", closed.group(1)))
     # messages flowed along the whole chain: sim -> residuals -> estimates, and alarms
-    for topic in ("/state", "/residuals", "/faults/estimate", "/faults/alarm"):
+    for topic in CHAIN:
         assert int(counts[topic]) > 0, counts
     assert (bag / "metadata.yaml").exists()

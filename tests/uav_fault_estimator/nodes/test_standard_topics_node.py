@@ -35,13 +35,13 @@ def flown(received: dict, topic: str) -> dict[float, object]:
 @pytest.mark.timeout(120)
 def test_each_state_is_published_in_the_standard_frames(short_scenario, start_process, graph):
     namespace = ["-r", "__ns:=/uav2"]
-    start_process(ros2_run_argv("uav_fault_estimator", "standard_topics_node",
-                                ros_args=[*namespace, "-p", "track_period_s:=1.0"]),
-                  "standard_topics_node")
     received = graph.subscribe({"/uav2/state": AircraftState, "/uav2/odom": Odometry,
                                 "/uav2/imu": Imu, "/uav2/fix": NavSatFix, "/tf": TFMessage,
                                 "/uav2/faults/seeded": FaultVector}, STREAM_QOS)
     received.update(graph.subscribe({"/uav2/track": Path, SEEDED: Float64}))
+    start_process(ros2_run_argv("uav_fault_estimator", "standard_topics_node", ros_args=[
+        *namespace, "-p", "track_period_s:=1.0", "-p", "wait_for_subscribers:=1"]),
+        "standard_topics_node")  # inputs once this test's subscriptions are matched
     scenario = short_scenario(DURATION_S, faults=[{"name": "right_wing_lift_loss",
                                                    "start_s": 0, "ramp_s": 0,
                                                    "magnitude_pct": 12.5}])
