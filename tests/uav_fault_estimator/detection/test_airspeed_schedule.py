@@ -82,6 +82,7 @@ def test_unseen_airspeeds_stay_near_the_design_and_faults_come_sooner(flown):
     assert spread["scheduled"] < 0.7 * spread["unscheduled"], spread
 
 
+@pytest.mark.slow  # the module's flights: about 30 s when no other test flew them
 @pytest.mark.timeout(240)
 def test_a_schedule_from_one_airspeed_is_refused(flown):
     calibration_flights, *_ = flown

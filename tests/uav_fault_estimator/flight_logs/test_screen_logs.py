@@ -153,6 +153,7 @@ def test_screen_writes_tables_figures_summaries(logs: Path, calibration: Path) -
     assert "precision" in judged.stdout.splitlines()[-2]
 
 
+@pytest.mark.slow  # the logs and their calibration: about 25 s when no other test made them
 @pytest.mark.timeout(60)
 def test_a_calibration_of_another_airframe_is_refused(logs: Path, calibration: Path) -> None:
     result = screen_logs("screen", logs / "aileron_loss.ulg", "--calibration", calibration,
