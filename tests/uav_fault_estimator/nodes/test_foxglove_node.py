@@ -13,13 +13,16 @@ import re
 import socket
 import struct
 import subprocess
+import threading
 import time
+from collections.abc import Callable
 
 import pytest
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.process_table import listening_port, listening_tcp
 from helpers.ros2_cli import param_get, param_set
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.serialization import deserialize_message
 from uav_common.package_data import default_parameters
 from uav_common.ros.node_tools import STREAM_QOS
@@ -44,6 +47,8 @@ RATE = "/sim_node.real_time_factor"  # live
 SENSOR_RATE = "/sim_node.sensor_rate_hz"  # read-only
 SUBSCRIPTION_ID = 7
 SEPARATOR = "=" * 80  # between a ros2msg definition and each nested type's
+POLL_S = 0.05  # pause between two requests asked again until the graph has what they need [s]
+REQUEST_TIMEOUT_S = 10.0  # longest wait for the answer to one Foxglove request [s]
 
 
 def estimate() -> FaultEstimate:
@@ -110,6 +115,36 @@ def parameters(client: ClientConnection, op: dict,
             for parameter in answer["parameters"]}, statuses
 
 
+def handled(client: ClientConnection, timeout_s: float) -> None:
+    """Return once the server has handled every op the client sent before this call.
+
+    foxglove-sdk's server handles one client's ops in order, each to its end (a subscribe
+    registered, a getParameters answered) before it reads the next one: so the answer to a
+    getParameters sent now comes after the earlier ops took effect. The protocol has no
+    acknowledgement of subscribe or subscribeParameterUpdates of its own. Asks for
+    foxglove_node's own port (its own node: answered without a round trip to another
+    process); fails on a status (an error about an earlier op) or no answer in timeout_s."""
+    values, statuses = parameters(client, {"op": "getParameters", "id": "handled",
+                                           "parameterNames": ["/foxglove_node.port"]},
+                                  timeout_s)
+    assert (values, statuses) == ({"/foxglove_node.port": 0}, []), (values, statuses)
+
+
+def values_once_discovered(client: ClientConnection, op: dict,
+                           done: Callable[[dict[str, object]], bool],
+                           timeout_s: float) -> dict[str, object]:
+    """The values answered to a getParameters op (parameters(), each answer within
+    REQUEST_TIMEOUT_S), asked again every POLL_S until done(values) holds (foxglove_node
+    answers for the nodes it has discovered so far) or timeout_s [s] passes; the last
+    values either way, for the caller to assert on."""
+    deadline = time.monotonic() + timeout_s
+    values, _ = parameters(client, op, REQUEST_TIMEOUT_S)
+    while not done(values) and time.monotonic() < deadline:
+        time.sleep(POLL_S)  # between polls, not to busy-loop the server: done() decides
+        values, _ = parameters(client, op, REQUEST_TIMEOUT_S)
+    return values
+
+
 def message_data(client: ClientConnection, timeout_s: float) -> bytes | None:
     """The next MessageData frame within timeout_s (other frames skipped), or None."""
     deadline = time.monotonic() + timeout_s
@@ -131,8 +166,13 @@ def test_a_client_receives_a_published_estimate_from_a_loopback_server(start_pro
     publisher = graph.node.create_publisher(FaultEstimate, TOPIC, STREAM_QOS)
     diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray})["/diagnostics"]
     try:
-        # the node subscribes once the topic has a publisher: this one
-        assert graph.wait_for_subscribers(TOPIC, 1, timeout_s=30), node.output()
+        # the node subscribes once the topic has a publisher: this one. Waited for on the
+        # publishing side (its own match count): from then on this publisher sends to the
+        # node's subscription, which matched the publisher when created (the node saw the
+        # publisher first), so nothing published later is lost on the way
+        assert graph.wait(f"foxglove_node's subscription of {TOPIC} matched by this test's "
+                          "publisher", lambda: publisher.get_subscription_count() >= 1,
+                          timeout_s=30), node.output()
         # the default host: loopback alone (port 0: the one the system chose)
         [(address, port)] = listening_tcp(node.pid)
         assert address == "127.0.0.1"
@@ -151,13 +191,19 @@ def test_a_client_receives_a_published_estimate_from_a_loopback_server(start_pro
 
             client.send(json.dumps({"op": "subscribe", "subscriptions": [
                 {"id": SUBSCRIPTION_ID, "channelId": channel["id"]}]}))
+            handled(client, timeout_s=10)  # the server forwards the channel to this client
             published = estimate()
-            frame = None  # published until the subscription has reached the server
-            while frame is None:
-                publisher.publish(published)
-                frame = message_data(client, timeout_s=0.2)
-            # its health, with this client subscribed and the estimate forwarded
-            graph.spin(5.0, until=lambda: reported(diagnostics).get("subscribed_clients") == "1")
+            publisher.publish(published)  # once: reliable, both ends matched, none lost
+            frame = message_data(client, timeout_s=10)
+            assert frame is not None, node.output()
+            # its health, with this client subscribed and messages forwarded (a status every
+            # second: waited for until one says so; messages_forwarded counts every topic's,
+            # /rosout's and /diagnostics' too, so it is this estimate's only in the final log)
+            assert graph.wait(
+                "foxglove_node to report this client subscribed and messages forwarded",
+                lambda: (reported(diagnostics).get("subscribed_clients") == "1"
+                         and int(reported(diagnostics).get("messages_forwarded", 0)) >= 1),
+                timeout_s=10), reported(diagnostics)
             status = reported(diagnostics)
             assert status["subscribed_clients"] == "1", status
             assert int(status["messages_forwarded"]) >= 1 and int(status["topics"]) >= 1
@@ -170,8 +216,8 @@ def test_a_client_receives_a_published_estimate_from_a_loopback_server(start_pro
         graph.node.destroy_publisher(publisher)
 
     assert node.stop() == 0, node.output()
-    assert re.search(rf"live view on ws://127.0.0.1:{port} stopped: .*{TOPIC} [1-9]",
-                     node.output()), node.output()
+    assert re.search(rf"live view on ws://127.0.0.1:{port} stopped: .*{TOPIC} 1(,|$)",
+                     node.output(), re.MULTILINE), node.output()
     print(node.output())
 
 
@@ -215,7 +261,6 @@ def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
     node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
         "-p", "port:=0", "-p", "use_sim_time:=true"]), "foxglove_node")
     port = listening_port(node.pid, timeout_s=30)
-    deadline = time.monotonic() + 30
     with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
                  open_timeout=10) as client:
         server_info = next_op(client, "serverInfo", timeout_s=10)
@@ -224,10 +269,11 @@ def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
         # simulation time, not wall time: the 600 s flight has just begun
         assert 0 < next_time_ns(client, timeout_s=30) < 600e9
 
+        # foxglove_node leaves out the nodes it has not discovered: asked until it answers
+        # for sim_node (both parameters are sim_node's: one answer has both or neither)
         ask = {"op": "getParameters", "parameterNames": [RATE, SENSOR_RATE], "id": "get"}
-        values, _ = parameters(client, ask, timeout_s=10)
-        while values == {} and time.monotonic() < deadline:  # until discovery found sim_node
-            values, _ = parameters(client, ask, timeout_s=10)
+        values = values_once_discovered(client, ask, lambda values: values != {},
+                                        timeout_s=30)
         assert values == {RATE: 1.0, SENSOR_RATE: 20.0}, sim.output()
         every, _ = parameters(client, {"op": "getParameters", "parameterNames": [],
                                        "id": "all"}, timeout_s=10)
@@ -250,9 +296,14 @@ def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
         assert statuses == [f"{RATE} refused: Parameter real_time_factor out of range Min: 0.0, "
                             "Max: 1000.0, value: 5000.0"]
 
-        # a change made elsewhere reaches a client subscribed to the parameter
+        # a change made elsewhere reaches a client subscribed to the parameter. Before the
+        # change: the server has taken the subscription (handled), and sim_node's
+        # /parameter_events publisher has matched foxglove_node's subscription, which
+        # foxglove_node made before its parameter clients: sim_node has answered those, so
+        # it had discovered the subscription (Fast DDS announces a participant's endpoints
+        # in order, on a reliable channel)
         client.send(json.dumps({"op": "subscribeParameterUpdates", "parameterNames": [RATE]}))
-        time.sleep(0.5)  # the subscription reaches the server
+        handled(client, timeout_s=10)
         assert param_set("/sim_node", "real_time_factor", "2.0") == "Set parameter successful"
         update = next_op(client, "parameterValues", timeout_s=10)
         assert update["parameters"] == [{"name": RATE, "type": "float64", "value": 2.0}]
@@ -266,17 +317,35 @@ def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_pro
     timeout_s = 0.5
     node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
         "-p", "port:=0", "-p", f"parameter_timeout_s:={timeout_s}"]), "foxglove_node")
-    # parameter services no executor serves: its requests wait for ever
+    # A node of the test's, its parameter services served (by a thread of the test's) until
+    # foxglove_node has discovered it, then by nobody: its requests wait for ever. Served
+    # first because foxglove_node answers for the nodes it has discovered so far: a request
+    # made before it knows of the node answers at once, and says nothing of a silent node.
     silent = rclpy.create_node("silent_node", context=graph.context)
+    executor = SingleThreadedExecutor(context=graph.context)
+    executor.add_node(silent)
+    serving = threading.Event()
+    serving.set()
+
+    def serve() -> None:
+        """Spin silent_node while serving is set (each spin_once at most 50 ms)."""
+        while serving.is_set():
+            executor.spin_once(timeout_sec=0.05)
+
+    server = threading.Thread(target=serve, name="silent_node", daemon=True)
+    server.start()
     try:
         port = listening_port(node.pid, timeout_s=30)
-        deadline = time.monotonic() + 30
         with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
                      open_timeout=10) as client:
             ask = {"op": "getParameters", "parameterNames": [], "id": "all"}
-            values: dict[str, object] = {}
-            while "/foxglove_node.port" not in values and time.monotonic() < deadline:
-                values, _ = parameters(client, ask, timeout_s=10)
+            values = values_once_discovered(
+                client, ask, lambda values: "/silent_node.use_sim_time" in values,
+                timeout_s=30)
+            # foxglove_node has found silent_node and its list and get services
+            assert values.get("/silent_node.use_sim_time") is False, values
+            serving.clear()
+            server.join()  # from here on silent_node answers nothing
             started = time.monotonic()
             values, _ = parameters(client, ask, timeout_s=10)
             took_s = time.monotonic() - started
@@ -286,6 +355,9 @@ def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_pro
         assert timeout_s <= took_s < 2 * timeout_s, took_s
         print(f"a request with a silent node took {took_s:.2f} s")
     finally:
+        serving.clear()
+        server.join()
+        executor.shutdown()
         silent.destroy_node()
     assert node.stop() == 0, node.output()
     assert "no answer to list_parameters within 0.5 s from /silent_node" in node.output()
