@@ -8,8 +8,9 @@ import time
 
 import pytest
 from helpers.echo_output import echo_documents
-from helpers.ros2_cli import run_cli
+from helpers.ros2_cli import run_cli, run_cli_all
 from helpers.samples import FRAME_ID, SAMPLE_FIELDS, STAMP_NANOSEC, STAMP_SEC, topic_of
+from uav_common.ros_processes import wait_until
 
 pytestmark = pytest.mark.integration
 
@@ -53,21 +54,14 @@ def test_echo_once_prints_every_message_type(sample_publisher, start_process) ->
 @pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_echo_field_prints_only_that_field(sample_publisher) -> None:
-    result = run_cli(
-        "topic", "echo", topic_of("Residuals"), "--once", "--timeout", "30", "--field", "residual"
+    result, nested = run_cli_all(
+        ["topic", "echo", topic_of("Residuals"), "--once", "--timeout", "30",
+         "--field", "residual"],
+        ["topic", "echo", topic_of("WindEstimate"), "--once", "--timeout", "30",
+         "--field", "header.stamp.sec"],
     )
     assert result.returncode == 0, result.stderr
     assert echo_documents(result.stdout)[0] == SAMPLE_FIELDS["Residuals"]["residual"]
-    nested = run_cli(
-        "topic",
-        "echo",
-        topic_of("WindEstimate"),
-        "--once",
-        "--timeout",
-        "30",
-        "--field",
-        "header.stamp.sec",
-    )
     assert echo_documents(nested.stdout) == [STAMP_SEC], nested.stdout
 
 
@@ -92,28 +86,34 @@ def test_echo_unknown_field_is_one_clear_error(sample_publisher) -> None:
 @pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_topic_list_info_and_node_list(sample_publisher) -> None:
-    listing = run_cli("topic", "list", "-t")
+    listing, info, nodes = run_cli_all(
+        ["topic", "list", "-t"], ["topic", "info", topic_of("FaultEstimate")], ["node", "list"]
+    )
     assert listing.returncode == 0, listing.stderr
     for name in SAMPLE_FIELDS:
         assert f"/{topic_of(name)} [uav_fault_msgs/msg/{name}]" in listing.stdout.splitlines()
-    info = run_cli("topic", "info", topic_of("FaultEstimate"))
     assert info.stdout.splitlines() == [
         "Type: uav_fault_msgs/msg/FaultEstimate",
         "Publisher count: 1",
         "Subscription count: 0",
     ]
-    nodes = run_cli("node", "list")
     assert "/sample_publisher" in nodes.stdout.splitlines()
     assert not any(line.startswith("/_") for line in nodes.stdout.splitlines())
+
+
+def rate_reports(output: str) -> list[float]:
+    """The average rates `ros2 topic hz` has printed."""
+    return [float(value) for value in re.findall(r"average rate: ([0-9.]+)", output)]
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_topic_hz_reports_the_publish_rate(sample_publisher, start_process) -> None:
     rate = start_process(["ros2", "topic", "hz", topic_of("AircraftState")], "hz")
-    time.sleep(6.0)
+    # a report a second, each on every arrival so far: the third averages about 3 s of them
+    assert wait_until(lambda: len(rate_reports(rate.output())) >= 3, timeout_s=40), rate.output()
     assert rate.stop() == 0, rate.output()
-    rates = [float(value) for value in re.findall(r"average rate: ([0-9.]+)", rate.output())]
+    rates = rate_reports(rate.output())
     print("ros2 topic hz reported:", rates)
     assert rates, rate.output()
     assert rates[-1] == pytest.approx(10.0, rel=0.1)
@@ -124,9 +124,9 @@ def test_topic_hz_reports_the_publish_rate(sample_publisher, start_process) -> N
 @pytest.mark.timeout(60)
 def test_echo_of_a_missing_topic_waits_like_ros2cli(start_process, ros_graph) -> None:
     echo = start_process(["ros2", "topic", "echo", "no_such_topic"], "echo_waiting")
-    time.sleep(4.0)
-    assert echo.running(), echo.output()
-    assert "does not appear to be published yet" in echo.output()
+    assert wait_until(lambda: "does not appear to be published yet" in echo.output(),
+                      timeout_s=30), echo.output()
+    assert echo.running(), echo.output()  # warned, and still waiting for the topic
     assert echo.stop() == 0 and "Traceback" not in echo.output()
 
 

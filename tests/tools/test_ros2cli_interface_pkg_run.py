@@ -4,7 +4,7 @@ packages, and `ros2 run --prefix` starting a live node."""
 from __future__ import annotations
 
 import pytest
-from helpers.ros2_cli import run_cli
+from helpers.ros2_cli import run_cli, run_cli_all
 from uav_common.ros_processes import ros2_run_argv
 
 ALARM_FIELDS = [
@@ -18,53 +18,62 @@ HEADER = ["std_msgs/Header header", "\tbuiltin_interfaces/Time stamp", "\t\tint3
 
 @pytest.mark.timeout(30)
 def test_interface_show_short_name_and_no_comments() -> None:
-    bare = run_cli("interface", "show", "uav_fault_msgs/FaultAlarm", "--no-comments")
+    wrong_names = {
+        "uav_fault_msgs/NoSuchType": "Could not find the interface 'uav_fault_msgs/NoSuchType'",
+        "a/b/c/d": "Invalid name 'a/b/c/d'. Expected three parts separated by '/'",
+    }
+    bare, full, short, service, *wrongs = run_cli_all(
+        ["interface", "show", "uav_fault_msgs/FaultAlarm", "--no-comments"],
+        ["interface", "show", "uav_fault_msgs/msg/FaultAlarm"],
+        ["interface", "show", "uav_fault_msgs/FaultAlarm"],
+        ["interface", "show", "rcl_interfaces/GetParameters", "--no-comments"],
+        *[["interface", "show", name] for name in wrong_names],
+    )
     assert (bare.returncode, bare.stderr) == (0, "")
     assert bare.stdout.splitlines() == HEADER + ALARM_FIELDS
-    full = run_cli("interface", "show", "uav_fault_msgs/msg/FaultAlarm")
-    assert full.stdout == run_cli("interface", "show", "uav_fault_msgs/FaultAlarm").stdout
+    assert full.stdout == short.stdout
     assert full.stdout.startswith("# ") and "" in full.stdout.splitlines()
-    service = run_cli("interface", "show", "rcl_interfaces/GetParameters", "--no-comments")
     lines = service.stdout.splitlines()
     assert lines[:3] == ["string[] names", "---", "ParameterValue[] values"]
     assert lines[3] == "\tuint8 type" and not any("#" in line for line in lines)
-    for name, message in (
-        ("uav_fault_msgs/NoSuchType", "Could not find the interface 'uav_fault_msgs/NoSuchType'"),
-        ("a/b/c/d", "Invalid name 'a/b/c/d'. Expected three parts separated by '/'"),
-    ):
-        wrong = run_cli("interface", "show", name)
+    for message, wrong in zip(wrong_names.values(), wrongs, strict=True):
         assert (wrong.returncode, wrong.stderr) == (1, message + "\n")
 
 
 @pytest.mark.timeout(30)
 def test_interface_list_and_package() -> None:
-    everything = run_cli("interface", "list")
+    everything, only_services, in_package, unknown = run_cli_all(
+        ["interface", "list"], ["interface", "list", "-s"],
+        ["interface", "package", "uav_fault_msgs"], ["interface", "package", "no_such_package"],
+    )
     assert everything.returncode == 0, everything.stderr
     lines = everything.stdout.splitlines()
     sections = [lines.index(title) for title in ("Messages:", "Services:", "Actions:")]
     assert sections == sorted(sections) and sections[0] == 0
     assert "    uav_fault_msgs/msg/FaultAlarm" in lines[: sections[1]]
     assert "    rcl_interfaces/srv/GetParameters" in lines[sections[1] : sections[2]]
-    services = run_cli("interface", "list", "-s").stdout.splitlines()
+    services = only_services.stdout.splitlines()
     assert services == lines[sections[1] : sections[2]]
-    package = run_cli("interface", "package", "uav_fault_msgs").stdout.splitlines()
+    package = in_package.stdout.splitlines()
     assert "uav_fault_msgs/msg/FaultAlarm" in package and package == sorted(package)
     assert package == [line.strip() for line in lines if line.startswith("    uav_fault_msgs/")]
-    unknown = run_cli("interface", "package", "no_such_package")
     assert (unknown.returncode, unknown.stderr) == (1, "Unknown package 'no_such_package'\n")
 
 
 @pytest.mark.timeout(30)
 def test_pkg_executables() -> None:
-    result = run_cli("pkg", "executables", "uav_fault_estimator")
+    result, full_paths, all_packages, unknown = run_cli_all(
+        ["pkg", "executables", "uav_fault_estimator"],
+        ["pkg", "executables", "uav_sim", "--full-path"], ["pkg", "executables"],
+        ["pkg", "executables", "no_such_package"],
+    )
     assert result.returncode == 0, result.stderr
     lines = result.stdout.splitlines()
     assert "uav_fault_estimator mhe_node" in lines and lines == sorted(lines)
-    paths = run_cli("pkg", "executables", "uav_sim", "--full-path").stdout.splitlines()
+    paths = full_paths.stdout.splitlines()
     assert any(path.endswith("/lib/uav_sim/sim_node") for path in paths)
-    every = run_cli("pkg", "executables").stdout.splitlines()
+    every = all_packages.stdout.splitlines()
     assert set(lines) <= set(every)
-    unknown = run_cli("pkg", "executables", "no_such_package")
     assert (unknown.returncode, unknown.stderr) == (1, "Package 'no_such_package' not found\n")
 
 

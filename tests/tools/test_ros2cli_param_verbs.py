@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 
 import pytest
 import yaml
 from helpers.repo import REPO_ROOT
-from helpers.ros2_cli import run_cli
+from helpers.ros2_cli import run_cli, run_cli_all
 
 pytestmark = pytest.mark.integration
 
@@ -18,25 +19,20 @@ def mhe_defaults() -> dict:
     return yaml.safe_load(MHE_CONFIG.read_text())["/**"]["ros__parameters"]
 
 
+@pytest.fixture
+def mhe_defaults_restored(mhe_node) -> Iterator[None]:
+    """For a test that sets parameters of the module's shared mhe_node: its configured
+    values put back afterwards, so that the other tests see them whatever ran before."""
+    yield
+    restored = run_cli("param", "load", "/mhe_node", str(MHE_CONFIG), "--use-wildcard")
+    assert restored.returncode == 0, restored.stderr
+
+
 # ------------------------------------------------------------------------------ param
 @pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_param_list_get_dump_show_the_config_values(mhe_node) -> None:
     defaults = mhe_defaults()
-    listing = run_cli("param", "list", "/mhe_node")
-    assert listing.returncode == 0, listing.stderr
-    lines = listing.stdout.splitlines()
-    assert lines == sorted(lines) and all(line.startswith("  ") for line in lines)
-    names = [line.strip() for line in lines]
-    assert set(defaults) | {"use_sim_time"} <= set(names), names
-
-    everyone = run_cli("param", "list")
-    assert "/mhe_node:" in everyone.stdout.splitlines()
-
-    typed = run_cli("param", "list", "mhe_node", "--param-type")
-    assert "  horizon (type: integer)" in typed.stdout.splitlines()
-    assert "  fault_names (type: string array)" in typed.stdout.splitlines()
-
     expected_lines = {
         "horizon": f"Integer value is: {defaults['horizon']}",
         "noise_variance_factor": f"Double value is: {defaults['noise_variance_factor']}",
@@ -45,11 +41,25 @@ def test_param_list_get_dump_show_the_config_values(mhe_node) -> None:
         "fault_names": f"String values are: {defaults['fault_names']}",
         "prior_pct": f"Double values are: array('d', {defaults['prior_pct']})",
     }
-    for name, line in expected_lines.items():
-        got = run_cli("param", "get", "/mhe_node", name)
+    listing, everyone, typed, dump, *gets = run_cli_all(
+        ["param", "list", "/mhe_node"], ["param", "list"],
+        ["param", "list", "mhe_node", "--param-type"], ["param", "dump", "/mhe_node"],
+        *[["param", "get", "/mhe_node", name] for name in expected_lines],
+    )
+    assert listing.returncode == 0, listing.stderr
+    lines = listing.stdout.splitlines()
+    assert lines == sorted(lines) and all(line.startswith("  ") for line in lines)
+    names = [line.strip() for line in lines]
+    assert set(defaults) | {"use_sim_time"} <= set(names), names
+
+    assert "/mhe_node:" in everyone.stdout.splitlines()
+
+    assert "  horizon (type: integer)" in typed.stdout.splitlines()
+    assert "  fault_names (type: string array)" in typed.stdout.splitlines()
+
+    for (name, line), got in zip(expected_lines.items(), gets, strict=True):
         assert (got.returncode, got.stdout) == (0, line + "\n"), (name, got.stdout, got.stderr)
 
-    dump = run_cli("param", "dump", "/mhe_node")
     assert dump.returncode == 0, dump.stderr
     assert dump.stdout.startswith("/mhe_node:\n  ros__parameters:\n")
     dumped = yaml.safe_load(dump.stdout)["/mhe_node"]["ros__parameters"]
@@ -67,9 +77,10 @@ def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
     # the horizon shapes the QP, built at start: read-only, so a set is refused with the reason
     assert result.stdout == ""
     assert answer == "Setting parameter failed: Trying to set a read-only parameter: horizon."
-    got = run_cli("param", "get", "/mhe_node", "horizon")
+    # after the refusal: the value unchanged, and a value of the wrong type refused too
+    got, wrong = run_cli_all(["param", "get", "/mhe_node", "horizon"],
+                             ["param", "set", "/mhe_node", "horizon", "many"])
     assert got.stdout == "Integer value is: 50\n"
-    wrong = run_cli("param", "set", "/mhe_node", "horizon", "many")
     assert wrong.returncode == 0 and wrong.stdout == ""
     assert re.fullmatch(r"Setting parameter failed: \S.*\n", wrong.stderr), wrong.stderr
     print("param set answers:", answer, "|", wrong.stderr.strip())
@@ -78,9 +89,11 @@ def test_param_set_prints_the_nodes_answer_in_ros2cli_words(mhe_node) -> None:
 @pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
-    missing_node = run_cli("param", "get", "/no_such_node", "horizon", "--spin-time", "1")
+    missing_node, missing_param = run_cli_all(
+        ["param", "get", "/no_such_node", "horizon", "--spin-time", "1"],
+        ["param", "get", "/mhe_node", "no_such_parameter"],
+    )
     assert (missing_node.returncode, missing_node.stderr) == (1, "Node not found\n")
-    missing_param = run_cli("param", "get", "/mhe_node", "no_such_parameter")
     assert missing_param.returncode == 1 and "Traceback" not in missing_param.stderr
     assert missing_param.stderr == "Parameter not set\n" or missing_param.stdout == (
         "Parameter not set.\n"
@@ -89,14 +102,17 @@ def test_param_errors_are_ros2cli_lines(mhe_node) -> None:
 
 @pytest.mark.slow
 @pytest.mark.timeout(90)
-def test_param_get_and_set_of_several_names(mhe_node) -> None:
+def test_param_get_and_set_of_several_names(mhe_node, mhe_defaults_restored) -> None:
     defaults = mhe_defaults()
-    got = run_cli("param", "get", "/mhe_node", "horizon", "arrival_centre")
+    got, hidden, odd = run_cli_all(
+        ["param", "get", "/mhe_node", "horizon", "arrival_centre"],
+        ["param", "get", "/mhe_node", "horizon", "use_sim_time", "--hide-type"],
+        ["param", "set", "/mhe_node", "horizon"],  # refused before it reaches the node
+    )
     assert (got.returncode, got.stdout) == (0, (
         f"horizon: Integer value is: {defaults['horizon']}\n"
         f"arrival_centre: String value is: {defaults['arrival_centre']}\n"
     )), got.stderr
-    hidden = run_cli("param", "get", "/mhe_node", "horizon", "use_sim_time", "--hide-type")
     assert hidden.stdout == f"horizon: {defaults['horizon']}\nuse_sim_time: False\n"
     both = run_cli("param", "set", "/mhe_node", "noise_variance_factor", "2.5", "horizon", "7")
     assert both.returncode == 0
@@ -106,7 +122,6 @@ def test_param_get_and_set_of_several_names(mhe_node) -> None:
     )
     after = run_cli("param", "get", "/mhe_node", "noise_variance_factor")
     assert after.stdout == "Double value is: 2.5\n"
-    odd = run_cli("param", "set", "/mhe_node", "horizon")
     assert (odd.returncode, odd.stderr) == (1, "Parameters must be provided as name/value "
                                                "pairs: name value [name value ...]. Got 1 "
                                                "argument(s).\n")
@@ -130,7 +145,8 @@ def test_param_describe_prints_type_description_and_constraints(mhe_node) -> Non
 
 @pytest.mark.slow
 @pytest.mark.timeout(90)
-def test_param_load_sets_each_parameter_and_reports_it(mhe_node, tmp_path) -> None:
+def test_param_load_sets_each_parameter_and_reports_it(mhe_node, mhe_defaults_restored,
+                                                       tmp_path) -> None:
     parameters = tmp_path / "mhe.yaml"
     parameters.write_text(yaml.safe_dump(
         {"/mhe_node": {"ros__parameters": {"noise_variance_factor": 3.5, "horizon": 10}}}
@@ -141,16 +157,18 @@ def test_param_load_sets_each_parameter_and_reports_it(mhe_node, tmp_path) -> No
     assert result.stderr == (
         "Set parameter horizon failed: Trying to set a read-only parameter: horizon.\n"
     )
-    assert run_cli("param", "get", "/mhe_node", "noise_variance_factor").stdout == (
-        "Double value is: 3.5\n"
+    # the project's file holds only '/**' parameters: ros2param needs --use-wildcard for
+    # them; without it nothing is set, so it may run beside the read of the loaded value
+    after, shared, missing = run_cli_all(
+        ["param", "get", "/mhe_node", "noise_variance_factor"],
+        ["param", "load", "/mhe_node", str(MHE_CONFIG)],
+        ["param", "load", "/mhe_node", str(tmp_path / "none.yaml")],
     )
-    # the project's file holds only '/**' parameters: ros2param needs --use-wildcard for them
-    shared = run_cli("param", "load", "/mhe_node", str(MHE_CONFIG))
+    assert after.stdout == "Double value is: 3.5\n"
     assert (shared.returncode, shared.stderr) == (
         1, "Param file does not contain selected parameters\n"
     )
+    assert missing.returncode == 1 and len(missing.stderr.splitlines()) == 1
     wildcard = run_cli("param", "load", "/mhe_node", str(MHE_CONFIG), "--use-wildcard")
     assert wildcard.returncode == 0 and "Traceback" not in wildcard.stderr
     assert "Set parameter noise_variance_factor successful" in wildcard.stdout.splitlines()
-    missing = run_cli("param", "load", "/mhe_node", str(tmp_path / "none.yaml"))
-    assert missing.returncode == 1 and len(missing.stderr.splitlines()) == 1

@@ -6,7 +6,8 @@ import re
 import time
 
 import pytest
-from helpers.ros2_cli import run_cli
+from helpers.ros2_cli import run_cli, run_cli_all
+from uav_common.ros_processes import wait_until
 
 pytestmark = pytest.mark.integration
 
@@ -23,27 +24,32 @@ PARAMETER_SERVICES = {
 @pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_service_list_and_type_show_the_parameter_services(mhe_node) -> None:
-    typed = run_cli("service", "list", "-t")
+    typed, listed, count, type_of, unknown = run_cli_all(
+        ["service", "list", "-t"], ["service", "list"], ["service", "list", "-c"],
+        ["service", "type", "/mhe_node/get_parameters"],
+        ["service", "type", "/mhe_node/no_such_service", "--spin-time", "1"],
+    )
     assert typed.returncode == 0, typed.stderr
     lines = typed.stdout.splitlines()
     assert lines == sorted(lines)
     for name, kind in PARAMETER_SERVICES.items():
         assert f"/mhe_node/{name} [{kind}]" in lines, lines
-    names = run_cli("service", "list").stdout.splitlines()
+    names = listed.stdout.splitlines()
     assert names == [line.split(" [")[0] for line in lines]
-    count = run_cli("service", "list", "-c")
     assert count.stdout == f"{len(names)}\n"
-    kind = run_cli("service", "type", "/mhe_node/get_parameters")
-    assert (kind.returncode, kind.stdout) == (0, "rcl_interfaces/srv/GetParameters\n")
-    unknown = run_cli("service", "type", "/mhe_node/no_such_service", "--spin-time", "1")
+    assert (type_of.returncode, type_of.stdout) == (0, "rcl_interfaces/srv/GetParameters\n")
     assert unknown.returncode == 1 and unknown.stdout == "" and "Traceback" not in unknown.stderr
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(90)
 def test_service_call_prints_request_and_response_like_ros2cli(mhe_node) -> None:
-    result = run_cli("service", "call", "/mhe_node/get_parameters",
-                     "rcl_interfaces/srv/GetParameters", "{names: [horizon, use_sim_time]}")
+    result, short_type = run_cli_all(
+        ["service", "call", "/mhe_node/get_parameters", "rcl_interfaces/srv/GetParameters",
+         "{names: [horizon, use_sim_time]}"],
+        ["service", "call", "/mhe_node/list_parameters",
+         "rcl_interfaces/ListParameters"],  # pkg/Name, and no YAML: defaults
+    )
     assert result.returncode == 0, result.stderr
     # "waiting for service..." first when discovery has not yet found the server
     body = result.stdout.removeprefix("waiting for service to become available...\n")
@@ -57,11 +63,13 @@ def test_service_call_prints_request_and_response_like_ros2cli(mhe_node) -> None
     assert values == [("2", "False", "50"), ("1", "False", "0")], response
     assert response.endswith(")])\n\n")
 
-    short_type = run_cli("service", "call", "/mhe_node/list_parameters",
-                         "rcl_interfaces/ListParameters")  # pkg/Name, and no YAML: defaults
     assert short_type.returncode == 0, short_type.stderr
     assert re.search(r"ListParametersResult\(names=\[[^]]*'noise_variance_factor'",
                      short_type.stdout), short_type.stdout
+
+
+RATE_PERIODS = 12  # 3 s at 4 Hz: a poll step and a late response each shift it by < 3 %
+POLL_S = 0.02
 
 
 @pytest.mark.slow
@@ -69,11 +77,21 @@ def test_service_call_prints_request_and_response_like_ros2cli(mhe_node) -> None
 def test_service_call_repeats_at_the_rate(mhe_node, start_process) -> None:
     caller = start_process(["ros2", "service", "call", "-r", "4", "/mhe_node/get_parameters",
                             "rcl_interfaces/srv/GetParameters", "{names: [horizon]}"], "call_rate")
-    time.sleep(5.0)
+
+    def responses() -> int:
+        return caller.output().count("response:\n")
+
+    # the rate from the time the next RATE_PERIODS responses take after the first (start-up
+    # and discovery left out), timed by polling the output at a fine step
+    assert wait_until(lambda: responses() >= 1, timeout_s=30, poll_s=POLL_S), caller.output()
+    first = responses()
+    started = time.monotonic()
+    assert wait_until(lambda: responses() >= first + RATE_PERIODS, timeout_s=30,
+                      poll_s=POLL_S), caller.output()
+    rate_hz = (responses() - first) / (time.monotonic() - started)
     assert caller.stop() == 0, caller.output()
-    responses = caller.output().count("response:\n")
-    print("responses in 5 s at -r 4:", responses)
-    assert 8 <= responses <= 21 and "Traceback" not in caller.output()
+    print(f"-r 4: {rate_hz:.2f} responses a second")
+    assert rate_hz == pytest.approx(4.0, rel=0.2) and "Traceback" not in caller.output()
 
 
 @pytest.mark.timeout(60)
