@@ -1,5 +1,5 @@
-"""Session-wide test setup: a ROS domain of the run's own, DDS on loopback only; the
-node tests' scenario files and watching node."""
+"""Test setup: a ROS domain of each module's own, DDS on loopback only; the node tests'
+scenario files and watching node."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import os
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import IO
 
 import cloudpickle
 import helpers
@@ -21,17 +22,36 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="session", autouse=True)
-def ros_domain(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
-    """Every ROS process of this test session runs on a domain id no other run holds,
-    and logs into the session's temporary folder rather than ~/.ros/log."""
-    domain_id, lock = reserve_domain_id()
-    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+def ros_logs(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Every ROS process of this test session keeps DDS on loopback and logs into the
+    session's temporary folder rather than ~/.ros/log."""
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     os.environ["ROS_LOG_DIR"] = str(tmp_path_factory.mktemp("ros_log"))
+
+
+@pytest.fixture(scope="session")
+def domain_locks() -> Iterator[list[IO[str]]]:
+    """The lock of the domain id in use (ros_domain), released at the session's end."""
+    locks: list[IO[str]] = []
     try:
-        yield domain_id
+        yield locks
     finally:
-        lock.close()
+        for lock in locks:
+            lock.close()
+
+
+@pytest.fixture(scope="module", autouse=True)
+def ros_domain(ros_logs: None, domain_locks: list[IO[str]]) -> int:
+    """Each test module's ROS processes run on a domain id no other run holds and no
+    earlier module of this session used last: an earlier module's endpoints (a killed
+    node's may linger) are never seen by a later one. The new id is locked before the
+    previous one is let go, so the two differ."""
+    domain_id, lock = reserve_domain_id()
+    for earlier in domain_locks:
+        earlier.close()
+    domain_locks[:] = [lock]
+    os.environ["ROS_DOMAIN_ID"] = str(domain_id)
+    return domain_id
 
 
 @pytest.fixture(scope="session")
@@ -43,9 +63,10 @@ def campaign() -> Iterator[Campaign]:
         yield session_campaign
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def ros_graph(ros_domain: int) -> Iterator[RosGraph]:
-    """A node in the test process for watching topics (needs the built workspace)."""
+    """A node in the test process for watching topics, on the module's domain (needs the
+    built workspace)."""
     if shutil.which("ros2") is None:
         pytest.fail("ros2 is not on PATH: run the tests through scripts/test.sh")
     graph = RosGraph()
