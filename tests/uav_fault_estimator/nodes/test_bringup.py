@@ -10,6 +10,7 @@ import subprocess
 import pytest
 from helpers.process_table import NODE_NAMES, kill_all, processes
 from helpers.repo import SCRIPTS
+from nav_msgs.msg import Odometry
 from tf2_msgs.msg import TFMessage
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.node_tools import STREAM_QOS
@@ -62,12 +63,16 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
     topics = {f"/uav{k}/faults/estimate": FaultEstimate for k in (1, 2)}
     estimates = graph.subscribe(topics, STREAM_QOS)
     transforms = graph.subscribe({"/tf": TFMessage}, STREAM_QOS)["/tf"]
+    odometry = graph.subscribe({f"/uav{k}/odom": Odometry for k in (1, 2)}, STREAM_QOS)
     # the leading simulator at 10 times real time; each simulator starts once its vehicle's
-    # residual_node and detector_node take its state (a live bringup does not wait: the
-    # first samples of a 1 s flight would go to discovery)
+    # residual_node, detector_node and standard_topics_node take its state, the last once
+    # this test takes its odom (a live bringup does not wait: the first samples of a 1 s
+    # flight would go to discovery)
     fast = tmp_path / "fast.yaml"
     fast.write_text("/**/sim_node:\n  ros__parameters:\n    real_time_factor: 10.0\n"
-                    "    wait_for_subscribers: 2\n")
+                    "    wait_for_subscribers: 3\n"
+                    "/**/standard_topics_node:\n  ros__parameters:\n"
+                    "    wait_for_subscribers: 1\n")
     scenarios = [str(short_scenario(10.0)), str(short_scenario(10.0, faults=[]))]
     bringup = start_process([str(BRINGUP), "--scenario", scenarios[0], "--scenario",
                              scenarios[1], "--params", str(fast), "--logs", str(logs)],
@@ -85,8 +90,12 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
     print("estimates received:", counts, "last stamps:", ends)
     assert ends == [10.0, 10.0] and min(counts) >= 15
     # both aircraft in the one map, each its own base_link
+    assert graph.wait("/tf of both aircraft", lambda: len(
+        {t.child_frame_id for m in transforms for t in m.transforms}) == 2, timeout_s=10)
     assert {(t.header.frame_id, t.child_frame_id) for m in transforms for t in m.transforms} \
         == {("map", "uav1/base_link"), ("map", "uav2/base_link")}
+    assert [{m.child_frame_id for m in odometry[f"/uav{k}/odom"]} for k in (1, 2)] == [
+        {"uav1/base_link"}, {"uav2/base_link"}]
     assert {str(path.relative_to(logs)) for path in logs.glob("*/*_node.log")} == {
         f"uav{k}/{name}.log" for k in (1, 2)
         for name in ("sim_node", "residual_node", "mhe_node", "detector_node",
