@@ -56,10 +56,13 @@ def ros_domain(ros_logs: None, domain_locks: list[IO[str]]) -> int:
 
 @pytest.fixture(scope="session")
 def campaign() -> Iterator[Campaign]:
-    """Flights of the session's tests on local worker processes, one per core, started once
-    (the calibrations' and studies' own execution layer)."""
+    """Flights of the session's tests on local worker processes, started once (the
+    calibrations' and studies' own execution layer): the cores shared among the pytest
+    processes (test.sh's spread), at least two so that a campaign runs in parallel."""
     cloudpickle.register_pickle_by_value(helpers)  # not on the workers' path: sent along
-    with Campaign(CampaignOptions(progress=False)) as session_campaign:
+    pytest_processes = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+    workers = max(2, (os.cpu_count() or 1) // pytest_processes)
+    with Campaign(CampaignOptions(workers=workers, progress=False)) as session_campaign:
         yield session_campaign
 
 
