@@ -69,14 +69,14 @@ class PacedPublishers:
                 counts, settled_at = latest, time.monotonic()
             rclpy.spin_once(self.node, timeout_sec=0.05)
 
-    def wait_until_delivered(self) -> None:
-        """Block until every subscriber has acknowledged what was published (no loss), in
-        short slices so that SIGINT ends the wait; a subscriber that has not acknowledged
-        within ACK_TIMEOUT_S (it died, and discovery has not dropped it yet) is warned of
-        and not waited for any longer."""
+    def wait_until_delivered(self, also: Sequence[Publisher] = ()) -> None:
+        """Block until every subscriber has acknowledged what was published on the paced
+        publishers and on `also` (no loss), in short slices so that SIGINT ends the wait; a
+        subscriber that has not acknowledged within ACK_TIMEOUT_S (it died, and discovery
+        has not dropped it yet) is warned of and not waited for any longer."""
         deadline = time.monotonic() + ACK_TIMEOUT_S
         poll = Duration(seconds=ACK_POLL_S)
-        for publisher in self.publishers:
+        for publisher in [*self.publishers, *also]:
             while rclpy.ok() and not publisher.wait_for_all_acked(poll):
                 if time.monotonic() > deadline:
                     self.node.get_logger().warning(

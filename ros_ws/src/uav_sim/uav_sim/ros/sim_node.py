@@ -28,6 +28,7 @@ from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
+from uav_common.message_fields import stamp_seconds
 from uav_common.ros.messages import (
     air_data_message,
     controls_message,
@@ -50,7 +51,7 @@ from uav_common.ros.node_tools import (
     run_node,
 )
 from uav_common.ros.paced_publishing import PacedPublishers
-from uav_common.sample_grid import GRID_TOLERANCE_S, NANOSECONDS_PER_SECOND
+from uav_common.sample_grid import GRID_TOLERANCE_S
 from uav_fault_msgs.msg import (
     AircraftState,
     AirData,
@@ -116,6 +117,11 @@ class SimNode(Node):
             self.paced.check_factor(self.parameters["real_time_factor"])
         self.clock_publisher = (None if self.follows_clock else
                                 self.create_publisher(Clock, "/clock", CLOCK_QOS))
+        # A follower's steps wait on a reliable /clock subscription of its own: use_sim_time's
+        # is best effort, and may miss the last /clock of a simulator that then ends.
+        self.followed_clock_s = 0.0
+        if self.follows_clock:
+            self.create_subscription(Clock, "/clock", self.on_clock, CLOCK_QOS)
         # a source: no inputs; stamped with the simulation time it publishes
         self.diagnostics = Diagnostics(self, silent_after_s=None,
                                        clock_s=lambda: self.simulation.time_s)
@@ -165,9 +171,12 @@ class SimNode(Node):
                     f"{self.scenario.duration_s:g} s: the vehicles' scenarios must last as "
                     "long")
 
+    def on_clock(self, message: Clock) -> None:
+        self.followed_clock_s = stamp_seconds(message.clock)
+
     def clock_s(self) -> float:
-        """The node's clock [s]: the domain's /clock when following it."""
-        return self.get_clock().now().nanoseconds / NANOSECONDS_PER_SECOND
+        """The followed /clock [s], as the node's own reliable subscription last heard it."""
+        return self.followed_clock_s
 
     def fly(self) -> None:
         """Step and publish until the scenario's end, paced by the real-time factor."""
@@ -183,7 +192,9 @@ class SimNode(Node):
             self.paced.pace(sample.time_s, self.simulation.sample_count, rate)
             self.report(sample, time.monotonic() - started)
             rclpy.spin_once(self, timeout_sec=0.0)
-        self.paced.wait_until_delivered()
+        # the followers' last /clock too, or they would wait for it in vain
+        self.paced.wait_until_delivered(also=[self.clock_publisher] if self.clock_publisher
+                                        else [])
         self.diagnostics.publish_last()  # the flight's whole CPU time, before the node ends
         self.get_logger().info(
             f"scenario '{self.scenario.name}' finished at {self.simulation.time_s:g} s of "
