@@ -14,7 +14,8 @@ import helpers
 import pytest
 import yaml
 from helpers.ros_graph import RosGraph
-from uav_common.ros_processes import RosProcess, reserve_domain_id
+from helpers.started_processes import started_processes
+from uav_common.ros_processes import reserve_domain_id
 from uav_fault_estimator.campaigns import Campaign, CampaignOptions
 from uav_sim.scenario import default_scenario_path
 
@@ -82,18 +83,8 @@ def ros_graph(ros_domain: int) -> Iterator[RosGraph]:
 @pytest.fixture
 def start_process(tmp_path: Path) -> Iterator:
     """start_process(argv, name) starts a command as a process; all are stopped at teardown."""
-    started: list[RosProcess] = []
-
-    def start(argv: list[str], name: str) -> RosProcess:
-        process = RosProcess(argv, tmp_path / f"{name}.log")
-        started.append(process)
-        return process
-
-    try:
+    with started_processes(tmp_path) as start:
         yield start
-    finally:
-        for process in reversed(started):
-            process.stop()
 
 
 @pytest.fixture

@@ -6,10 +6,11 @@ start-up and discovery (2-4 s on a loaded machine)."""
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import pytest
 from helpers.samples import SAMPLE_FIELDS, topic_of
+from helpers.started_processes import StartProcess, started_processes
 from uav_common.ros_processes import RosProcess, ros2_run_argv
 
 PUBLISHER = [sys.executable, "tests/helpers/sample_publisher.py"]
@@ -18,21 +19,10 @@ SAMPLE_TOPICS = ["/" + topic_of(name) for name in SAMPLE_FIELDS]
 
 @pytest.fixture(scope="module")
 def start_module_process(tmp_path_factory: pytest.TempPathFactory,
-                         ros_domain: int) -> Iterator[Callable[[list[str], str], RosProcess]]:
+                         ros_domain: int) -> Iterator[StartProcess]:
     """start_process for the module's shared processes: stopped when the module's tests end."""
-    folder = tmp_path_factory.mktemp("module_processes")
-    started: list[RosProcess] = []
-
-    def start(argv: list[str], name: str) -> RosProcess:
-        process = RosProcess(argv, folder / f"{name}.log")
-        started.append(process)
-        return process
-
-    try:
+    with started_processes(tmp_path_factory.mktemp("module_processes")) as start:
         yield start
-    finally:
-        for process in reversed(started):
-            process.stop()
 
 
 @pytest.fixture(scope="module")
