@@ -10,6 +10,9 @@ from concurrent.futures import ThreadPoolExecutor
 # settle (about 1.6 s), not CPU; more than three at once on two loaded cores would slow
 # their start-up enough to crowd their --spin-time.
 CONCURRENT_COMMANDS = 3
+# --spin-time of param_set and param_get: the longest the command may look for a live node
+# (it goes on as soon as it finds it); its 2 s default is too short on two loaded cores.
+FIND_NODE_S = "30"
 
 
 def run_cli(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess:
@@ -27,13 +30,13 @@ def run_cli_all(*commands: Sequence[str],
 
 def param_set(node: str, name: str, value: str) -> str:
     """What `ros2 param set` prints (stdout and stderr), stripped."""
-    result = run_cli("param", "set", node, name, value)
+    result = run_cli("param", "set", node, name, value, "--spin-time", FIND_NODE_S)
     assert result.returncode == 0, result.stderr
     return (result.stdout + result.stderr).strip()
 
 
 def param_get(node: str, name: str) -> str:
     """What `ros2 param get` prints, stripped."""
-    result = run_cli("param", "get", node, name)
+    result = run_cli("param", "get", node, name, "--spin-time", FIND_NODE_S)
     assert result.returncode == 0, result.stderr
     return result.stdout.strip()
