@@ -20,7 +20,13 @@ from uav_fault_estimator.detection.detector import DetectorSample
 from uav_fault_estimator.detection.generators import GridSample, regressions
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
-from uav_fault_estimator.flight_logs.evaluation import evaluation_summary, flight_outcome
+from uav_fault_estimator.flight_logs.evaluation import (
+    by_kind,
+    evaluation_summary,
+    flight_outcome,
+    kind_lines,
+    within_limit,
+)
 from uav_fault_estimator.flight_logs.ground_truth import (
     NO_FAILURE,
     FlightTruth,
@@ -143,6 +149,32 @@ def test_flights_are_counted_once_each_against_their_truth() -> None:
     assert (summary["tp"], summary["fp"], summary["fn"], summary["tn"]) == (1, 2, 1, 1)
     assert summary["precision"] == pytest.approx(1 / 3) and summary["recall"] == 0.5
     assert summary["accuracy"] == pytest.approx(2 / 5) and summary["max_delay_s"] == 3.0
+
+
+@pytest.mark.timeout(30)
+def test_alfa_counts_a_first_alarm_past_5_s_as_a_miss_and_each_kind_apart() -> None:
+    times_s, start_s, channels = np.arange(0.0, 60.0, 0.2), 1000.0, ("roll", "propulsion")
+    cases = {  # flight: (truth, alarms: time [s from start] -> channel index)
+        "engine_soon": (FlightTruth("engine", 1030.0), {32.0: 1}),
+        "engine_late": (FlightTruth("engine", 1030.0), {37.0: 1}),
+        "at_the_limit": (FlightTruth("aileron", 1030.0), {35.0: 0}),
+        "both_parts": (FlightTruth("rudder+aileron", 1030.0), {}),
+        "quiet": (NO_FAILURE, {}),
+    }
+    outcomes = [flight_outcome(name, truth, samples_alarmed_at(times_s, alarms), channels,
+                               start_s) for name, (truth, alarms) in cases.items()]
+    counted = [within_limit(outcome) for outcome in outcomes]
+    assert [o.outcome for o in outcomes] == ["tp", "tp", "tp", "fn", "tn"]
+    assert [o.outcome for o in counted] == ["tp", "fn", "tp", "fn", "tn"]
+    assert counted[1].delay_s is None and counted[1].right_channel is None
+    kinds = by_kind(counted)
+    assert list(kinds) == ["engine", "aileron", "aileron+rudder", "none"]
+    assert (kinds["engine"]["flights"], kinds["engine"]["tp"], kinds["engine"]["fn"]) == (2, 1, 1)
+    assert kinds["engine"]["mean_delay_s"] == pytest.approx(2.0)
+    assert by_kind(outcomes)["engine"]["max_delay_s"] == pytest.approx(7.0)
+    lines = kind_lines(outcomes)
+    assert len(lines) == 5 and lines[1].split() == ["engine", "2", "2", "4.5", "7.0", "1",
+                                                    "2.0", "2.0", "0"]
 
 
 @pytest.mark.timeout(60)

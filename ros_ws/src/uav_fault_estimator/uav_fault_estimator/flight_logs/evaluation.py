@@ -10,12 +10,16 @@ Counted per flight, each flight once:
 - a failure flight without a combined alarm: a false negative (fn);
 - a flight without failure: fp with any combined alarm, else a true negative (tn).
 precision tp / (tp + fp), recall tp / (tp + fn), accuracy (tp + tn) / flights.
+
+ALFA's evaluator (castacks/alfa-dataset-tools) also counts a first alarm later than
+ALFA_DETECTION_LIMIT_S after the onset as a miss (fn): within_limit(). Summaries are given
+over all flights and per failure kind (by_kind; KIND_ORDER, Keipour et al.'s table's rows).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -23,6 +27,13 @@ import numpy as np
 from uav_fault_estimator.detection.detector import DetectorSample
 from uav_fault_estimator.flight_logs.ground_truth import FlightTruth
 from uav_fault_estimator.flight_logs.screening import COMBINED, TIME_DECIMALS, channel_alarms
+
+# A first alarm later than this after the onset is a miss in ALFA's evaluator [s].
+ALFA_DETECTION_LIMIT_S = 5.0
+# The failure kinds a summary is given for, in Keipour et al.'s order; two failed parts are
+# one kind, their names sorted and joined by '+'.
+NO_FAILURE_KIND = "none"
+KIND_ORDER = ("engine", "aileron", "elevator", "rudder", "aileron+rudder", NO_FAILURE_KIND)
 
 
 @dataclass(frozen=True)
@@ -74,6 +85,33 @@ def flight_outcome(flight: str, truth: FlightTruth, samples: Sequence[DetectorSa
         right_channel=channel in truth.expected_channels if outcome == "tp" else None,
         flown_after_onset_s=None if onset is None else _stamp(end_stamp_s - onset),
         end_stamp_s=_stamp(end_stamp_s))
+
+
+def within_limit(outcome: FlightOutcome,
+                 limit_s: float = ALFA_DETECTION_LIMIT_S) -> FlightOutcome:
+    """The outcome as ALFA's evaluator counts it: a true positive whose delay exceeds
+    limit_s [s] is a miss (fn, without delay or channel); every other outcome as it is."""
+    if outcome.outcome != "tp" or outcome.delay_s <= limit_s:
+        return outcome
+    return replace(outcome, outcome="fn", delay_s=None, right_channel=None)
+
+
+def failure_kind(outcome: FlightOutcome) -> str:
+    """The flight's failure kind as KIND_ORDER spells it."""
+    if outcome.failure is None:
+        return NO_FAILURE_KIND
+    return "+".join(sorted(set(outcome.failure.split("+"))))
+
+
+def by_kind(outcomes: Sequence[FlightOutcome]) -> dict[str, dict[str, Any]]:
+    """evaluation_summary() of each failure kind's flights (with `flights`, their count), in
+    KIND_ORDER, then any other kind; kinds without flights left out."""
+    kinds = sorted({failure_kind(o) for o in outcomes},
+                   key=lambda kind: (KIND_ORDER.index(kind) if kind in KIND_ORDER
+                                     else len(KIND_ORDER), kind))
+    return {kind: {"flights": len(group), **evaluation_summary(group)}
+            for kind in kinds
+            for group in [[o for o in outcomes if failure_kind(o) == kind]]}
 
 
 def _stamp(value: float) -> float:
@@ -130,3 +168,25 @@ def summary_line(summary: dict[str, Any]) -> str:
             f"{seconds(summary['mean_delay_s'])}, largest {seconds(summary['max_delay_s'])}; "
             f"first alarm on a channel of the failed part {summary['right_channel']} of "
             f"{summary['tp']}")
+
+
+def kind_lines(outcomes: Sequence[FlightOutcome],
+               limit_s: float = ALFA_DETECTION_LIMIT_S) -> list[str]:
+    """Keipour et al.'s table: per failure kind the flights, those found (at any delay, and
+    within limit_s [s] as ALFA's evaluator counts), mean and largest delay [s] of each, and
+    the flights alarmed before their onset or without a failure (fp)."""
+    any_delay = by_kind(outcomes)
+    within = by_kind([within_limit(o, limit_s) for o in outcomes])
+
+    def seconds(value: float | None) -> str:
+        return "-" if value is None else f"{value:.1f}"
+
+    lines = [f"{'kind':<15} {'flights':>7} {'found':>5} {'mean_s':>6} {'max_s':>6}   "
+             f"{f'found<={limit_s:g}s':>11} {'mean_s':>6} {'max_s':>6} {'fp':>3}"]
+    for kind, every in any_delay.items():
+        counted = within[kind]
+        lines.append(f"{kind:<15} {every['flights']:>7} {every['tp']:>5} "
+                     f"{seconds(every['mean_delay_s']):>6} {seconds(every['max_delay_s']):>6}   "
+                     f"{counted['tp']:>11} {seconds(counted['mean_delay_s']):>6} "
+                     f"{seconds(counted['max_delay_s']):>6} {every['fp']:>3}")
+    return lines
