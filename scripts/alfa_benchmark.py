@@ -60,14 +60,11 @@ from uav_fault_estimator.flight_logs.benchmark import (
 from uav_fault_estimator.flight_logs.evaluation import (
     ALFA_DETECTION_LIMIT_S,
     OUTCOME_HEADING,
-    FlightOutcome,
-    by_kind,
-    evaluation_summary,
+    alfa_summary,
     kind_lines,
     outcome_dict,
     outcome_line,
     summary_line,
-    within_limit,
 )
 from uav_fault_estimator.flight_logs.ground_truth import alfa_truth, is_alfa_flight
 from uav_fault_estimator.flight_logs.readers import log_paths
@@ -145,10 +142,10 @@ def run(arguments: argparse.Namespace) -> dict:
                                      arguments.false_alarm_probability)
     except ValueError as error:  # a generator without samples to fit it on
         raise BadInputError(str(error)) from None
-    summary = counted(outcomes)
+    summary = alfa_summary(outcomes)
     print(OUTCOME_HEADING)
     print("\n".join(map(outcome_line, outcomes)))
-    print("\n".join(kind_lines(outcomes)))
+    print("\n".join(kind_lines(summary)))
     print(f"within {ALFA_DETECTION_LIMIT_S:g} s (ALFA's evaluator): "
           f"{summary_line(summary['within_limit'])}")
     print(f"at any delay: {summary_line(summary['any_delay'])}")
@@ -167,16 +164,6 @@ def run(arguments: argparse.Namespace) -> dict:
         "flights": [outcome_dict(outcome) for outcome in outcomes],
         "summary": summary,
     }
-
-
-def counted(outcomes: list[FlightOutcome]) -> dict:
-    """The record's summary: counted within ALFA's detection limit and at any delay, over
-    all flights and per failure kind (flight_logs.evaluation)."""
-    within = [within_limit(outcome) for outcome in outcomes]
-    return {"detection_limit_s": ALFA_DETECTION_LIMIT_S,
-            "within_limit": evaluation_summary(within),
-            "any_delay": evaluation_summary(outcomes),
-            "by_kind": {"within_limit": by_kind(within), "any_delay": by_kind(outcomes)}}
 
 
 def parser() -> argparse.ArgumentParser:

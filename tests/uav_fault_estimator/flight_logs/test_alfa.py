@@ -21,6 +21,7 @@ from uav_fault_estimator.detection.generators import GridSample, regressions
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
 from uav_fault_estimator.flight_logs.evaluation import (
+    alfa_summary,
     by_kind,
     evaluation_summary,
     flight_outcome,
@@ -172,7 +173,7 @@ def test_alfa_counts_a_first_alarm_past_5_s_as_a_miss_and_each_kind_apart() -> N
     assert (kinds["engine"]["flights"], kinds["engine"]["tp"], kinds["engine"]["fn"]) == (2, 1, 1)
     assert kinds["engine"]["mean_delay_s"] == pytest.approx(2.0)
     assert by_kind(outcomes)["engine"]["max_delay_s"] == pytest.approx(7.0)
-    lines = kind_lines(outcomes)
+    lines = kind_lines(alfa_summary(outcomes))
     assert len(lines) == 5 and lines[1].split() == ["engine", "2", "2", "4.5", "7.0", "1",
                                                     "2.0", "2.0", "0"]
 

@@ -170,19 +170,29 @@ def summary_line(summary: dict[str, Any]) -> str:
             f"{summary['tp']}")
 
 
-def kind_lines(outcomes: Sequence[FlightOutcome],
-               limit_s: float = ALFA_DETECTION_LIMIT_S) -> list[str]:
-    """Keipour et al.'s table: per failure kind the flights, those found (at any delay, and
-    within limit_s [s] as ALFA's evaluator counts), mean and largest delay [s] of each, and
-    the flights alarmed before their onset or without a failure (fp)."""
-    any_delay = by_kind(outcomes)
-    within = by_kind([within_limit(o, limit_s) for o in outcomes])
+def alfa_summary(outcomes: Sequence[FlightOutcome],
+                 limit_s: float = ALFA_DETECTION_LIMIT_S) -> dict[str, Any]:
+    """A benchmark's summary: evaluation_summary() within limit_s [s] (within_limit()) and at
+    any delay, over all flights and per failure kind (by_kind)."""
+    within = [within_limit(outcome, limit_s) for outcome in outcomes]
+    return {"detection_limit_s": limit_s,
+            "within_limit": evaluation_summary(within),
+            "any_delay": evaluation_summary(outcomes),
+            "by_kind": {"within_limit": by_kind(within), "any_delay": by_kind(outcomes)}}
+
+
+def kind_lines(summary: dict[str, Any]) -> list[str]:
+    """Keipour et al.'s table from an alfa_summary(): per failure kind the flights, those
+    found (at any delay, and within the limit as ALFA's evaluator counts), mean and largest
+    delay [s] of each, and the flights alarmed before their onset or without a failure (fp)."""
+    any_delay, within = summary["by_kind"]["any_delay"], summary["by_kind"]["within_limit"]
 
     def seconds(value: float | None) -> str:
         return "-" if value is None else f"{value:.1f}"
 
+    found_within = f"found<={summary['detection_limit_s']:g}s"
     lines = [f"{'kind':<15} {'flights':>7} {'found':>5} {'mean_s':>6} {'max_s':>6}   "
-             f"{f'found<={limit_s:g}s':>11} {'mean_s':>6} {'max_s':>6} {'fp':>3}"]
+             f"{found_within:>11} {'mean_s':>6} {'max_s':>6} {'fp':>3}"]
     for kind, every in any_delay.items():
         counted = within[kind]
         lines.append(f"{kind:<15} {every['flights']:>7} {every['tp']:>5} "
