@@ -11,12 +11,13 @@ from __future__ import annotations
 import re
 import signal
 import subprocess
+import sys
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import recorded_count
-from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
-from uav_common.ros_processes import ros2_run_argv, stop_all
+from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS, STUCK_STOP_S
+from uav_common.ros_processes import ros2_run_argv, stop_all, wait_until
 from uav_fault_msgs.msg import AircraftState
 
 pytestmark = pytest.mark.integration
@@ -108,3 +109,36 @@ def test_the_whole_graph_started_in_the_background_ends_cleanly(start_process, g
     for topic in CHAIN:
         assert int(counts[topic]) > 0, counts
     assert (bag / "metadata.yaml").exists()
+
+
+# A node whose run loop, once stopped, hangs (as a call into the middleware might).
+HANGING_NODE = """
+import time
+from rclpy.node import Node
+from uav_common.ros.node_tools import Stopped, run_node
+
+def run(node):
+    print("running", flush=True)
+    try:
+        while True:
+            time.sleep(0.05)
+    except Stopped:
+        time.sleep(60)  # hangs in its clean-up, where it cannot be stopped again
+
+run_node("hanging_node", lambda: Node("hanging_node"), run)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(60)
+def test_a_node_hanging_after_a_stop_prints_where(start_process):
+    """A node still running STUCK_STOP_S after SIGINT prints every thread's stack on
+    stderr, before stop_all kills it: the log of a hang says where it hung."""
+    node = start_process([sys.executable, "-c", HANGING_NODE], "hanging_node")
+    assert wait_until(lambda: "running" in node.output(), timeout_s=30), node.output()
+    node.send_signal(signal.SIGINT)
+    assert wait_until(lambda: "most recent call first" in node.output(),
+                      timeout_s=STUCK_STOP_S + 5), node.output()
+    output = node.output()
+    assert "in run" in output and node.running(), output  # it says where, and still hangs
+    node.send_signal(signal.SIGKILL)

@@ -4,6 +4,7 @@ publisher, and the main that runs a node and ends it cleanly (run_node)."""
 
 from __future__ import annotations
 
+import faulthandler
 import re
 import signal
 import sys
@@ -43,6 +44,7 @@ from uav_common.health import CPU_KEY, hardware_id
 from uav_common.package_data import default_parameters
 from uav_common.ros.messages import stamp
 from uav_common.ros.parameter_files import wildcard_only_names
+from uav_common.ros_processes import STOP_TIMEOUT_S
 
 # Sensor-rate streams and estimates, by each node's `qos` parameter. "reliable" (the
 # default): keep-all, so that a fast simulation loses nothing while subscribers catch up;
@@ -359,6 +361,10 @@ NodeType = TypeVar("NodeType", bound=Node)
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 STOP_POLL_S = 0.1  # longest wait of spin() between looks at a stop signal [s, wall time]
+# A node still running this long after a stop signal prints every thread's stack on stderr
+# (faulthandler's own thread: it also reports a main thread stuck inside C) [s, wall time];
+# before ros_processes.stop_all kills what remains.
+STUCK_STOP_S = STOP_TIMEOUT_S - 2.0
 
 
 class Stopped(KeyboardInterrupt):
@@ -379,6 +385,7 @@ def _stop(signum: int, _frame: object) -> None:
     for sig in STOP_SIGNALS:  # once is enough: the node's clean-up is not interrupted
         signal.signal(sig, signal.SIG_IGN)
     _StopRequest.signal = signum
+    faulthandler.dump_traceback_later(STUCK_STOP_S, exit=False)
     if _StopRequest.raises:
         raise Stopped(signal.Signals(signum).name)
 
