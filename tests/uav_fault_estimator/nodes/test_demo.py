@@ -7,7 +7,7 @@ import json
 import os
 import re
 import subprocess
-import time
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -411,16 +411,25 @@ def test_one_aircraft_failing_leaves_the_other_to_finish(
     assert not nodes_logging_under(run_dir)
 
 
+SIGINT_DEFAULT, SIGINT_IGNORED = (
+    f"import signal, time; signal.signal(signal.SIGINT, signal.{disposition}); "
+    "print('ready', flush=True); time.sleep(60)" for disposition in ("SIG_DFL", "SIG_IGN"))
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(60)
 def test_a_process_ended_by_the_stops_sigint_is_no_failure(tmp_path) -> None:
     """A node process without a SIGINT handler yet ends by the signal itself (status -2):
     stopped as asked, not reported; one that ignores it and is killed is."""
     demo = Demo([Vehicle("", load_scenario(scenarios_dir() / "default.yaml"), None)], tmp_path)
-    demo.nodes["stopped_by_sigint"] = RosProcess(["sleep", "60"], tmp_path / "sleep.log")
-    demo.nodes["killed"] = RosProcess(["sh", "-c", "trap '' INT; sleep 60"],
-                                      tmp_path / "trap.log")
-    time.sleep(0.5)  # the trap set
+    # SIGINT's disposition set by each process itself: the test's own may be inherited as
+    # ignored (a suite started with `&` from a script).
+    demo.nodes["stopped_by_sigint"] = RosProcess([sys.executable, "-c", SIGINT_DEFAULT],
+                                                 tmp_path / "default.log")
+    demo.nodes["killed"] = RosProcess([sys.executable, "-c", SIGINT_IGNORED],
+                                      tmp_path / "ignored.log")
+    assert wait_until(lambda: all("ready" in node.output() for node in demo.nodes.values()),
+                      timeout_s=30)
     assert demo.stop() == ["killed exited with status -9 (killed by SIGKILL) when stopped"]
 
 
