@@ -74,6 +74,7 @@ from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generat
 from uav_fault_estimator.flight_logs.airframe import Airframe, load_airframe
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
 from uav_fault_estimator.flight_logs.evaluation import (
+    ALFA_DETECTION_LIMIT_S,
     OUTCOME_HEADING,
     evaluation_summary,
     flight_outcome,
@@ -247,7 +248,7 @@ def screen_logs(arguments: argparse.Namespace) -> None:
         write_alarm_csv(out / f"{name}.alarms.csv", intervals, inputs.start_stamp_s)
         plot_screening(f"{name}: designed P_FA {arguments.false_alarm_probability:g} per "
                        "sample and test", inputs, samples, channels, intervals, period_s,
-                       out / f"{name}.png", onset_s)
+                       out / f"{name}.png", onset_s, ALFA_DETECTION_LIMIT_S)
         (out / f"{name}.json").write_text(json.dumps(summary, indent=2) + "\n")
         summaries.append(summary)
     evaluation = None

@@ -19,13 +19,18 @@ from helpers.simulated_logs import ALFA, ROSTOPIC
 from uav_fault_estimator.detection.detector import DetectorSample
 from uav_fault_estimator.detection.generators import GridSample, regressions
 from uav_fault_estimator.flight_logs.airframe import load_airframe
-from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
+from uav_fault_estimator.flight_logs.benchmark import (
+    LabelledFlight,
+    fault_free_part,
+    flight_day,
+    leave_out_folds,
+)
 from uav_fault_estimator.flight_logs.evaluation import (
     alfa_summary,
-    by_kind,
     evaluation_summary,
     flight_outcome,
     kind_lines,
+    within_counts,
     within_limit,
 )
 from uav_fault_estimator.flight_logs.ground_truth import (
@@ -168,14 +173,30 @@ def test_alfa_counts_a_first_alarm_past_5_s_as_a_miss_and_each_kind_apart() -> N
     assert [o.outcome for o in outcomes] == ["tp", "tp", "tp", "fn", "tn"]
     assert [o.outcome for o in counted] == ["tp", "fn", "tp", "fn", "tn"]
     assert counted[1].delay_s is None and counted[1].right_channel is None
-    kinds = by_kind(counted)
+    summary = alfa_summary(outcomes)
+    assert (summary["tp"], summary["tp_5s"], summary["fn_5s"]) == (3, 2, 2)
+    assert summary["recall_5s"] == 0.5 and summary["mean_delay_5s"] == pytest.approx(3.5)
+    assert within_counts(summary)["tp"] == 2
+    kinds = summary["by_kind"]
     assert list(kinds) == ["engine", "aileron", "aileron+rudder", "none"]
-    assert (kinds["engine"]["flights"], kinds["engine"]["tp"], kinds["engine"]["fn"]) == (2, 1, 1)
-    assert kinds["engine"]["mean_delay_s"] == pytest.approx(2.0)
-    assert by_kind(outcomes)["engine"]["max_delay_s"] == pytest.approx(7.0)
-    lines = kind_lines(alfa_summary(outcomes))
+    engine = kinds["engine"]
+    assert (engine["flights"], engine["tp_5s"], engine["fn_5s"]) == (2, 1, 1)
+    assert engine["mean_delay_5s"] == pytest.approx(2.0)
+    assert engine["max_delay_s"] == pytest.approx(7.0)
+    lines = kind_lines(summary)
     assert len(lines) == 5 and lines[1].split() == ["engine", "2", "2", "4.5", "7.0", "1",
                                                     "2.0", "2.0", "0"]
+
+
+@pytest.mark.timeout(10)
+def test_leaving_a_day_out_calibrates_on_the_other_days_only() -> None:
+    day_s = 86400.0
+    starts_s = [1531900000.0, 1531900000.0 + 3600.0, 1531900000.0 + 12 * day_s,
+                1531900000.0 + 12 * day_s + 60.0, 1531900000.0 + 55 * day_s]
+    days = [flight_day(start_s) for start_s in starts_s]
+    assert days[0] == "2018-07-18" and days[0] == days[1] and days[2] == days[3] != days[0]
+    assert leave_out_folds(days) == [([0, 1], [2, 3, 4]), ([2, 3], [0, 1, 4]),
+                                     ([4], [0, 1, 2, 3])]
 
 
 @pytest.mark.timeout(60)

@@ -6,18 +6,21 @@ A calibration learns from the fault-free parts of flights: a flight without fail
 a failure flight up to its onset less a margin (the last seconds before an onset may already
 carry the injection's preparation, and are never needed). Leave one flight out: each
 labelled flight is screened with the calibration from every other flight's fault-free part;
-or one set of flights calibrates and another is screened.
+leave one day out: each day's flights with the calibration from the other days' flights
+(what a new day brings: weather, trims, sensor offsets, that no flight of it taught); or one
+set of flights calibrates and another is screened.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from datetime import UTC, datetime
 
 import numpy as np
 
 from uav_fault_estimator.detection.calibration import Calibration
-from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
+from uav_fault_estimator.detection.detector import DetectorFlight, DetectorSample, run_detector
 from uav_fault_estimator.flight_logs.evaluation import FlightOutcome, flight_outcome
 from uav_fault_estimator.flight_logs.ground_truth import FlightTruth
 from uav_fault_estimator.flight_logs.resample import DetectorInputs
@@ -51,33 +54,52 @@ def fault_free_part(flight: LabelledFlight, margin_s: float = ONSET_MARGIN_S
 
 
 Calibrate = Callable[[Sequence[DetectorFlight]], Calibration]
+# (screened, calibration): indices of the flights screened together, of those calibrating
+Fold = tuple[list[int], list[int]]
+
+
+def flight_day(start_stamp_s: float) -> str:
+    """The UTC date (YYYY-MM-DD) of a log that starts at start_stamp_s [s, UNIX time]:
+    flights of one day share its weather, its airframe's state and its sensors' offsets."""
+    start = datetime.fromtimestamp(start_stamp_s, tz=UTC)
+    return start.date().isoformat()
+
+
+def leave_out_folds(groups: Sequence[str]) -> list[Fold]:
+    """Each group (by flight its name, or its day) screened with what the other groups
+    calibrate, in the order the groups first appear."""
+    return [([k for k, g in enumerate(groups) if g == group],
+             [k for k, g in enumerate(groups) if g != group])
+            for group in dict.fromkeys(groups)]
+
+
+# seen(flight, calibration, samples): told of every flight screened (to draw it, say)
+Seen = Callable[[LabelledFlight, Calibration, list[DetectorSample]], None]
 
 
 def screened(flight: LabelledFlight, calibration: Calibration,
-             false_alarm_probability: float) -> FlightOutcome:
+             false_alarm_probability: float, seen: Seen | None = None) -> FlightOutcome:
     """One flight screened with calibration and held against its truth."""
     samples = run_detector(calibration, flight.inputs.flight, false_alarm_probability)
+    if seen is not None:
+        seen(flight, calibration, samples)
     return flight_outcome(flight.name, flight.truth, samples, calibration.channel_names,
                           flight.inputs.start_stamp_s)
 
 
-def leave_one_out(flights: Sequence[LabelledFlight], calibrate: Calibrate,
-                  false_alarm_probability: float,
-                  margin_s: float = ONSET_MARGIN_S) -> list[FlightOutcome]:
-    """Each flight screened with calibrate(the fault-free parts of all the others)."""
-    parts = [fault_free_part(flight, margin_s) for flight in flights]
-    outcomes = []
-    for k, flight in enumerate(flights):
-        others = [part for j, part in enumerate(parts) if j != k and part is not None]
-        outcomes.append(screened(flight, calibrate(others), false_alarm_probability))
-    return outcomes
-
-
-def calibrated_on(calibration_flights: Sequence[LabelledFlight],
-                  flights: Sequence[LabelledFlight], calibrate: Calibrate,
-                  false_alarm_probability: float,
-                  margin_s: float = ONSET_MARGIN_S) -> list[FlightOutcome]:
-    """Every flight screened with one calibration from calibration_flights' fault-free parts."""
+def screened_in_folds(flights: Sequence[LabelledFlight], folds: Sequence[Fold],
+                      calibrate: Calibrate, false_alarm_probability: float,
+                      calibration_flights: Sequence[LabelledFlight] | None = None,
+                      margin_s: float = ONSET_MARGIN_S,
+                      seen: Seen | None = None) -> list[FlightOutcome]:
+    """Every flight screened with calibrate(the fault-free parts of its fold's calibration
+    flights: indices into calibration_flights, flights themselves by default), in the order
+    of flights; seen told of each."""
+    calibration_flights = flights if calibration_flights is None else calibration_flights
     parts = [fault_free_part(flight, margin_s) for flight in calibration_flights]
-    calibration = calibrate([part for part in parts if part is not None])
-    return [screened(flight, calibration, false_alarm_probability) for flight in flights]
+    outcomes: dict[int, FlightOutcome] = {}
+    for screened_indices, calibration_indices in folds:
+        calibration = calibrate([parts[j] for j in calibration_indices if parts[j] is not None])
+        for k in screened_indices:
+            outcomes[k] = screened(flights[k], calibration, false_alarm_probability, seen)
+    return [outcomes[k] for k in range(len(flights))]

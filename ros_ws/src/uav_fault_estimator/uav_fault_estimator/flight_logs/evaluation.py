@@ -13,12 +13,13 @@ precision tp / (tp + fp), recall tp / (tp + fn), accuracy (tp + tn) / flights.
 
 ALFA's evaluator (castacks/alfa-dataset-tools) also counts a first alarm later than
 ALFA_DETECTION_LIMIT_S after the onset as a miss (fn): within_limit(). Summaries are given
-over all flights and per failure kind (by_kind; KIND_ORDER, Keipour et al.'s table's rows).
+over all flights and per failure kind (alfa_summary; KIND_ORDER, Keipour et al.'s table's
+rows).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -65,6 +66,20 @@ def flight_outcome(flight: str, truth: FlightTruth, samples: Sequence[DetectorSa
     start_stamp_s that start in the log's clock [s]), channels the order of their arrays."""
     stamps_s = start_stamp_s + np.array([sample.time_s for sample in samples])
     raised = channel_alarms(samples, len(channels))[COMBINED]
+    end_stamp_s = float(stamps_s[-1]) if stamps_s.size else start_stamp_s
+    return alarms_outcome(flight, truth, stamps_s, raised, channels, truth.expected_channels,
+                          end_stamp_s)
+
+
+def alarms_outcome(flight: str, truth: FlightTruth, stamps_s: np.ndarray, raised: np.ndarray,
+                   channels: Sequence[str], right_channels: Sequence[str],
+                   end_stamp_s: float) -> FlightOutcome:
+    """The outcome of any detector's alarms: raised (K, len(channels)) bool, which channel
+    alarmed at each of the stamps_s (K,) [s, the log's clock]; right_channels the channels
+    that read what the failure acts on; end_stamp_s the flight's last sample [s]. Counted as
+    the module's docstring says."""
+    stamps_s = np.asarray(stamps_s, dtype=float)
+    raised = np.asarray(raised, dtype=bool).reshape(stamps_s.size, len(channels))
     alarmed = raised.any(axis=1)
     onset = truth.onset_stamp_s
     before = alarmed & (stamps_s < onset) if onset is not None else alarmed
@@ -76,13 +91,12 @@ def flight_outcome(flight: str, truth: FlightTruth, samples: Sequence[DetectorSa
         outcome = "fp" if alarmed.any() else "tn"
     else:
         outcome = "fp" if before.any() else ("tp" if first is not None else "fn")
-    end_stamp_s = float(stamps_s[-1]) if stamps_s.size else start_stamp_s
     return FlightOutcome(
         flight=flight, failure=truth.failure, onset_stamp_s=onset,
         first_alarm_stamp_s=None if first is None else _stamp(stamps_s[first]),
         first_alarm_channel=channel, alarms_before_onset=int(before.sum()), outcome=outcome,
         delay_s=_stamp(stamps_s[first] - onset) if outcome == "tp" else None,
-        right_channel=channel in truth.expected_channels if outcome == "tp" else None,
+        right_channel=channel in right_channels if outcome == "tp" else None,
         flown_after_onset_s=None if onset is None else _stamp(end_stamp_s - onset),
         end_stamp_s=_stamp(end_stamp_s))
 
@@ -103,25 +117,18 @@ def failure_kind(outcome: FlightOutcome) -> str:
     return "+".join(sorted(set(outcome.failure.split("+"))))
 
 
-def by_kind(outcomes: Sequence[FlightOutcome]) -> dict[str, dict[str, Any]]:
-    """evaluation_summary() of each failure kind's flights (with `flights`, their count), in
-    KIND_ORDER, then any other kind; kinds without flights left out."""
-    kinds = sorted({failure_kind(o) for o in outcomes},
-                   key=lambda kind: (KIND_ORDER.index(kind) if kind in KIND_ORDER
-                                     else len(KIND_ORDER), kind))
-    return {kind: {"flights": len(group), **evaluation_summary(group)}
-            for kind in kinds
-            for group in [[o for o in outcomes if failure_kind(o) == kind]]}
-
-
 def _stamp(value: float) -> float:
     return round(float(value), TIME_DECIMALS)
 
 
+SUMMARY_KEYS = ("tp", "fp", "fn", "tn", "precision", "recall", "accuracy", "mean_delay_s",
+                "max_delay_s", "right_channel")
+
+
 def evaluation_summary(outcomes: Sequence[FlightOutcome]) -> dict[str, Any]:
-    """The counts over flights (the module's docstring), the delays of the true positives
-    [s] (mean and largest; None without any) and how many of them alarmed first on a
-    channel the failure acts on."""
+    """SUMMARY_KEYS: the counts over flights (the module's docstring), the delays of the true
+    positives [s] (mean and largest; None without any) and how many of them alarmed first on
+    a channel the failure acts on."""
     counts = {kind: sum(o.outcome == kind for o in outcomes) for kind in ("tp", "fp", "fn", "tn")}
     tp, fp, fn, tn = counts.values()
     delays = [o.delay_s for o in outcomes if o.outcome == "tp"]
@@ -170,31 +177,53 @@ def summary_line(summary: dict[str, Any]) -> str:
             f"{summary['tp']}")
 
 
+def limit_key(key: str, limit_s: float) -> str:
+    """A summary key counted within limit_s [s]: `tp` -> `tp_5s`, `mean_delay_s` ->
+    `mean_delay_5s` (DESIGN.md's record)."""
+    return f"{key.removesuffix('_s')}_{limit_s:g}s"
+
+
+def _both_counts(outcomes: Sequence[FlightOutcome], limit_s: float) -> dict[str, Any]:
+    """evaluation_summary() at any delay, and within limit_s [s] under limit_key() names."""
+    within = evaluation_summary([within_limit(outcome, limit_s) for outcome in outcomes])
+    return {**evaluation_summary(outcomes),
+            **{limit_key(key, limit_s): value for key, value in within.items()}}
+
+
 def alfa_summary(outcomes: Sequence[FlightOutcome],
                  limit_s: float = ALFA_DETECTION_LIMIT_S) -> dict[str, Any]:
-    """A benchmark's summary: evaluation_summary() within limit_s [s] (within_limit()) and at
-    any delay, over all flights and per failure kind (by_kind)."""
-    within = [within_limit(outcome, limit_s) for outcome in outcomes]
-    return {"detection_limit_s": limit_s,
-            "within_limit": evaluation_summary(within),
-            "any_delay": evaluation_summary(outcomes),
-            "by_kind": {"within_limit": by_kind(within), "any_delay": by_kind(outcomes)}}
+    """A benchmark's summary: evaluation_summary() at any delay (`tp`, ...) and within
+    limit_s [s] as ALFA's evaluator counts (within_limit(): `tp_5s`, ...), over all flights
+    and per failure kind (`by_kind`, each with its `flights`, in KIND_ORDER)."""
+    kinds = sorted({failure_kind(o) for o in outcomes},
+                   key=lambda kind: (KIND_ORDER.index(kind) if kind in KIND_ORDER
+                                     else len(KIND_ORDER), kind))
+    return {"detection_limit_s": limit_s, **_both_counts(outcomes, limit_s),
+            "by_kind": {kind: {"flights": len(group), **_both_counts(group, limit_s)}
+                        for kind in kinds
+                        for group in [[o for o in outcomes if failure_kind(o) == kind]]}}
 
 
-def kind_lines(summary: dict[str, Any]) -> list[str]:
+def within_counts(summary: Mapping[str, Any]) -> dict[str, Any]:
+    """The counts within the limit of an alfa_summary() (or of one of its kinds), under
+    evaluation_summary()'s names."""
+    limit_s = summary.get("detection_limit_s", ALFA_DETECTION_LIMIT_S)
+    return {key: summary[limit_key(key, limit_s)] for key in SUMMARY_KEYS}
+
+
+def kind_lines(summary: Mapping[str, Any]) -> list[str]:
     """Keipour et al.'s table from an alfa_summary(): per failure kind the flights, those
     found (at any delay, and within the limit as ALFA's evaluator counts), mean and largest
     delay [s] of each, and the flights alarmed before their onset or without a failure (fp)."""
-    any_delay, within = summary["by_kind"]["any_delay"], summary["by_kind"]["within_limit"]
-
     def seconds(value: float | None) -> str:
         return "-" if value is None else f"{value:.1f}"
 
-    found_within = f"found<={summary['detection_limit_s']:g}s"
+    limit_s = summary["detection_limit_s"]
+    found_within = f"found<={limit_s:g}s"
     lines = [f"{'kind':<15} {'flights':>7} {'found':>5} {'mean_s':>6} {'max_s':>6}   "
              f"{found_within:>11} {'mean_s':>6} {'max_s':>6} {'fp':>3}"]
-    for kind, every in any_delay.items():
-        counted = within[kind]
+    for kind, every in summary["by_kind"].items():
+        counted = within_counts({"detection_limit_s": limit_s, **every})
         lines.append(f"{kind:<15} {every['flights']:>7} {every['tp']:>5} "
                      f"{seconds(every['mean_delay_s']):>6} {seconds(every['max_delay_s']):>6}   "
                      f"{counted['tp']:>11} {seconds(counted['mean_delay_s']):>6} "

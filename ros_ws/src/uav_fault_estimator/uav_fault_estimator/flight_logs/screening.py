@@ -157,12 +157,14 @@ def write_alarm_csv(path: Path, intervals: Sequence[AlarmInterval],
 
 def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[DetectorSample],
                    channels: Sequence[str], intervals: Sequence[AlarmInterval],
-                   period_s: float, path: Path, onset_s: float | None = None) -> Path:
+                   period_s: float, path: Path, onset_s: float | None = None,
+                   detection_limit_s: float | None = None) -> Path:
     """One log's figure: body rates and surfaces [deg], airspeed (the log's and the filtered
     one the schedule used) [m/s], each channel's GLRT statistic over its threshold and the
     parameter deviations over theirs (log scale), the combined alarm intervals shaded on
     every panel (each sample widened by half a period_s [s] either side), and a failure's
-    onset_s [s from the log's start] as a line on every panel."""
+    onset_s [s from the log's start] as a line on every panel, followed by the window of
+    detection_limit_s [s] in which a first alarm counts (ALFA's evaluator) when given."""
     times_s = np.array([sample.time_s for sample in samples])
     combined = [(i.start_s - period_s / 2, i.end_s + period_s / 2)
                 for i in intervals if i.test == COMBINED]
@@ -197,6 +199,9 @@ def plot_screening(title: str, inputs: DetectorInputs, samples: Sequence[Detecto
         shade_alarms(axis, combined)
         if onset_s is not None:
             axis.axvline(onset_s, color="r", linestyle="--", linewidth=1.0, label="onset")
+            if detection_limit_s is not None:
+                axis.axvspan(onset_s, onset_s + detection_limit_s, color="g", alpha=0.12,
+                             label=f"first {detection_limit_s:g} s")
         axis.legend(fontsize=7, loc="upper left")
     axes[0].set_title(title)
     axes[-1].set_xlabel(f"time from the log's start [s] (its stamp: {inputs.start_stamp_s:.6f} s)")
