@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 from uav_fault_estimator.flight_logs.airframe import load_airframe
-from uav_fault_estimator.flight_logs.benchmark import ONSET_MARGIN_S, Fold
+from uav_fault_estimator.flight_logs.benchmark import ONSET_MARGIN_S, Fold, in_folds
 from uav_fault_estimator.flight_logs.evaluation import FlightOutcome, alarms_outcome
 from uav_fault_estimator.flight_logs.ground_truth import FlightTruth
 from uav_fault_estimator.flight_logs.readers import read_log
@@ -172,12 +172,9 @@ def screened_in_folds(flights: Sequence[PeerFlight], folds: Sequence[Fold],
     """Every flight held against its truth with the thresholds of its fold's calibration
     flights (indices into calibration_flights, flights themselves by default)."""
     calibration_flights = flights if calibration_flights is None else calibration_flights
-    outcomes: dict[int, FlightOutcome] = {}
-    for screened_indices, calibration_indices in folds:
-        threshold = thresholds([calibration_flights[j] for j in calibration_indices])
-        for k in screened_indices:
-            outcomes[k] = outcome(flights[k], threshold)
-    return [outcomes[k] for k in range(len(flights))]
+    return in_folds(len(flights), folds,
+                    lambda indices: thresholds([calibration_flights[j] for j in indices]),
+                    lambda k, threshold: outcome(flights[k], threshold))
 
 
 @dataclass(frozen=True)

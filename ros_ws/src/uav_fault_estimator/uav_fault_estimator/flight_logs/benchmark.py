@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from typing import Any
 
 import numpy as np
 
@@ -97,9 +98,21 @@ def screened_in_folds(flights: Sequence[LabelledFlight], folds: Sequence[Fold],
     of flights; seen told of each."""
     calibration_flights = flights if calibration_flights is None else calibration_flights
     parts = [fault_free_part(flight, margin_s) for flight in calibration_flights]
+    return in_folds(
+        len(flights), folds,
+        lambda indices: calibrate([parts[j] for j in indices if parts[j] is not None]),
+        lambda k, calibration: screened(flights[k], calibration, false_alarm_probability,
+                                        seen))
+
+
+def in_folds(count: int, folds: Sequence[Fold],
+             calibrated: Callable[[list[int]], Any],
+             outcome: Callable[[int, Any], FlightOutcome]) -> list[FlightOutcome]:
+    """Any detector's outcomes over folds: per fold, calibrated(its calibration indices) once,
+    then outcome(k, that calibration) of each flight k it screens; in the order 0..count-1."""
     outcomes: dict[int, FlightOutcome] = {}
     for screened_indices, calibration_indices in folds:
-        calibration = calibrate([parts[j] for j in calibration_indices if parts[j] is not None])
+        calibration = calibrated(calibration_indices)
         for k in screened_indices:
-            outcomes[k] = screened(flights[k], calibration, false_alarm_probability, seen)
-    return [outcomes[k] for k in range(len(flights))]
+            outcomes[k] = outcome(k, calibration)
+    return [outcomes[k] for k in range(count)]
