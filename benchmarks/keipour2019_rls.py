@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 from uav_fault_estimator.flight_logs.airframe import load_airframe
-from uav_fault_estimator.flight_logs.benchmark import ONSET_MARGIN_S, Fold, in_folds
+from uav_fault_estimator.flight_logs.benchmark import Fold, fault_free, in_folds
 from uav_fault_estimator.flight_logs.evaluation import FlightOutcome, alarms_outcome
 from uav_fault_estimator.flight_logs.ground_truth import FlightTruth
 from uav_fault_estimator.flight_logs.readers import read_log
@@ -140,18 +140,11 @@ def peer_flight(name: str, path: Path, airframe_path: Path, truth: FlightTruth) 
                       prediction_residuals(times_s, command, measured))
 
 
-def fault_free_residuals(flight: PeerFlight, margin_s: float = ONSET_MARGIN_S) -> np.ndarray:
-    """The residuals a threshold may learn from: the whole of a flight without failure, up
-    to margin_s [s] before the onset of a failure flight (as the project's calibration)."""
-    onset = flight.truth.onset_stamp_s
-    if onset is None:
-        return flight.residuals
-    return flight.residuals[flight.stamps_s < onset - margin_s]
-
-
 def thresholds(flights: Sequence[PeerFlight]) -> np.ndarray:
-    """(P,) the largest |residual| of each pair over the flights' fault-free parts."""
-    parts = np.vstack([fault_free_residuals(flight) for flight in flights])
+    """(P,) the largest |residual| of each pair over the flights' fault-free parts (those
+    the project's calibration learns from: benchmark.fault_free)."""
+    parts = np.vstack([flight.residuals[fault_free(flight.stamps_s, flight.truth)]
+                       for flight in flights])
     return np.nanmax(np.abs(parts), axis=0)
 
 

@@ -179,7 +179,7 @@ def printed_summary(title: str, outcomes: Sequence[FlightOutcome]) -> dict:
     print("\n".join(map(outcome_line, outcomes)))
     print("\n".join(kind_lines(summary)))
     print(f"within {ALFA_DETECTION_LIMIT_S:g} s (ALFA's evaluator): "
-          f"{summary_line(within_counts(summary))}")
+          f"{summary_line(within_counts(summary, ALFA_DETECTION_LIMIT_S))}")
     print(f"at any delay: {summary_line(summary)}")
     return summary
 

@@ -260,7 +260,7 @@ ALFA_SUMMARY = (("tp", "tp"), ("fp", "fp"), ("fn", "fn"), ("tn", "tn"),
 
 def alfa_counts(name: str, summary: Mapping[str, Any]) -> list[list[Any]]:
     """Rows of one detector's summary: within the limit (ALFA's evaluator) and at any delay."""
-    within = within_counts(summary)
+    within = within_counts(summary, summary["detection_limit_s"])
     return [[name, f"within {number(summary['detection_limit_s'])} s",
              *(within[field] for _, field in ALFA_SUMMARY)],
             [name, "at any delay", *(summary[field] for _, field in ALFA_SUMMARY)]]
@@ -270,7 +270,7 @@ def alfa_kinds(name: str, summary: Mapping[str, Any]) -> list[list[Any]]:
     """Rows per failure kind of one detector's summary, Keipour et al.'s table."""
     rows = []
     for kind, every in summary["by_kind"].items():
-        within = within_counts({"detection_limit_s": summary["detection_limit_s"], **every})
+        within = within_counts(every, summary["detection_limit_s"])
         rows.append([name, kind, every["flights"], every["tp"], every["mean_delay_s"],
                      every["max_delay_s"], within["tp"], within["mean_delay_s"],
                      within["max_delay_s"], every["fp"]])

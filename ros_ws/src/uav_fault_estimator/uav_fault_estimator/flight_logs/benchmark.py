@@ -39,15 +39,24 @@ class LabelledFlight:
     truth: FlightTruth
 
 
+def fault_free(stamps_s: np.ndarray, truth: FlightTruth,
+               margin_s: float = ONSET_MARGIN_S) -> np.ndarray:
+    """Which samples, at stamps_s (K,) [s, the log's clock], a calibration may learn from:
+    all of a flight without failure, those up to margin_s [s] before the onset of a failure
+    flight."""
+    if truth.onset_stamp_s is None:
+        return np.ones(np.shape(stamps_s), dtype=bool)
+    return np.asarray(stamps_s) < truth.onset_stamp_s - margin_s
+
+
 def fault_free_part(flight: LabelledFlight, margin_s: float = ONSET_MARGIN_S
                     ) -> DetectorFlight | None:
-    """The flight's samples a calibration may learn from: all of a flight without failure,
-    those up to margin_s [s] before the onset of a failure flight; None when none are left."""
+    """The flight's samples a calibration may learn from (fault_free); None when none are
+    left."""
     inputs = flight.inputs
-    onset = flight.truth.onset_stamp_s
-    if onset is None:
+    if flight.truth.onset_stamp_s is None:
         return inputs.flight
-    kept = inputs.start_stamp_s + inputs.times_s < onset - margin_s
+    kept = fault_free(inputs.start_stamp_s + inputs.times_s, flight.truth, margin_s)
     if not kept.any():
         return None
     return DetectorFlight(*(None if column is None else np.asarray(column)[kept]

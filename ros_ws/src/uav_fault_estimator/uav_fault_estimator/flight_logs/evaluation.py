@@ -204,11 +204,10 @@ def alfa_summary(outcomes: Sequence[FlightOutcome],
                         for group in [[o for o in outcomes if failure_kind(o) == kind]]}}
 
 
-def within_counts(summary: Mapping[str, Any]) -> dict[str, Any]:
-    """The counts within the limit of an alfa_summary() (or of one of its kinds), under
+def within_counts(counts: Mapping[str, Any], limit_s: float) -> dict[str, Any]:
+    """The counts within limit_s [s] of an alfa_summary() (or of one of its kinds), under
     evaluation_summary()'s names."""
-    limit_s = summary.get("detection_limit_s", ALFA_DETECTION_LIMIT_S)
-    return {key: summary[limit_key(key, limit_s)] for key in SUMMARY_KEYS}
+    return {key: counts[limit_key(key, limit_s)] for key in SUMMARY_KEYS}
 
 
 def kind_lines(summary: Mapping[str, Any]) -> list[str]:
@@ -223,7 +222,7 @@ def kind_lines(summary: Mapping[str, Any]) -> list[str]:
     lines = [f"{'kind':<15} {'flights':>7} {'found':>5} {'mean_s':>6} {'max_s':>6}   "
              f"{found_within:>11} {'mean_s':>6} {'max_s':>6} {'fp':>3}"]
     for kind, every in summary["by_kind"].items():
-        counted = within_counts({"detection_limit_s": limit_s, **every})
+        counted = within_counts(every, limit_s)
         lines.append(f"{kind:<15} {every['flights']:>7} {every['tp']:>5} "
                      f"{seconds(every['mean_delay_s']):>6} {seconds(every['max_delay_s']):>6}   "
                      f"{counted['tp']:>11} {seconds(counted['mean_delay_s']):>6} "
