@@ -10,8 +10,9 @@ import math
 
 import numpy as np
 import pytest
+from uav_sim.frames import GRAVITY_MPS2
 from uav_sim.guidance import route_errors
-from uav_sim.mpc_guidance import GRAVITY_MPS2, MpcGuidance, MpcSettings, prediction_matrices
+from uav_sim.mpc_guidance import MpcGuidance, MpcSettings, prediction_matrices
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import Guidance, load_scenario
 from uav_sim.simulation import Simulation

@@ -42,6 +42,7 @@ from uav_fault_estimator.flight_logs.ground_truth import (
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
 from uav_fault_estimator.flight_logs.streams import AIRSPEED, BODY_RATES
+from uav_sim.frames import GRAVITY_MPS2
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 
@@ -217,7 +218,7 @@ def test_the_tracking_and_propulsion_generators_regress_as_documented() -> None:
     state[[3, 4, 9, 10]] = [0.1, 0.05, 0.2, -0.1]  # roll, pitch [rad]; p, q [rad/s]
     state[[6, 7, 8]] = [20.0, 0.0, -1.0]  # ground velocity north, east, down [m/s]
     controls[4] = 0.6  # throttle
-    now = GridSample(state, controls, np.array([0.3, 0.15, 0.5]))
+    now = GridSample(1.0, state, controls, np.array([0.3, 0.15, 0.5]))
     found = regressions(("roll_tracking", "pitch_tracking", "climb_tracking", "propulsion"),
                         now, None)
     np.testing.assert_allclose(found["roll_tracking"][0], [0.2, 1.0])
@@ -230,10 +231,29 @@ def test_the_tracking_and_propulsion_generators_regress_as_documented() -> None:
     assert found["propulsion"][1] == 0.6
     assert regressions(("yaw",), now, None) is None  # r[k-1] needed
     controls[[2, 3]] = [0.05, -0.02]  # aileron, rudder [rad]
-    before = GridSample(state.copy(), controls, now.setpoints)
+    before = GridSample(0.8, state.copy(), controls, now.setpoints)
     before.state[11] = 0.3  # r[k-1] [rad/s]
     lateral = regressions(("roll_rudder", "yaw_rudder"), now, before)
     np.testing.assert_allclose(lateral["roll_rudder"][0], [0.05, -0.02, 1.0])
     np.testing.assert_allclose(lateral["yaw_rudder"][0], [0.05, 0.3, -0.02, 1.0])
-    unknown = GridSample(state, controls, np.full(3, math.nan))
+    unknown = GridSample(1.0, state, controls, np.full(3, math.nan))
     assert regressions(("roll_tracking",), unknown, now) is None
+
+
+@pytest.mark.timeout(30)
+def test_the_lateral_force_is_zero_in_a_coordinated_turn_and_reads_a_sideslip() -> None:
+    """Heading north at 20 m/s, wings level, pitch and yaw 0, over 0.2 s."""
+    before = GridSample(1.0, np.zeros(14), np.zeros(7), np.full(3, math.nan))
+    before.state[6] = 20.0
+    assert regressions(("lateral_force",), before, None) is None  # needs the sample before
+    skid = GridSample(1.2, before.state.copy(), before.controls, before.setpoints)
+    skid.state[7] = 0.4  # east [m/s]: 2 m/s^2 sideways with the wings level
+    phi, force_mps2 = regressions(("lateral_force",), skid, before)["lateral_force"]
+    np.testing.assert_allclose(phi, [1.0])
+    assert force_mps2 == pytest.approx(2.0)
+    bank_rad = 0.3
+    turn = GridSample(1.2, before.state.copy(), before.controls, before.setpoints)
+    turn.state[3] = bank_rad
+    turn.state[7] = GRAVITY_MPS2 * math.tan(bank_rad) * 0.2  # the turn's centripetal pull
+    assert regressions(("lateral_force",), turn, before)["lateral_force"][1] == pytest.approx(
+        0.0, abs=1e-12)

@@ -17,8 +17,9 @@ from tf2_msgs.msg import TFMessage
 from uav_common.message_fields import stamp_seconds, state_array
 from uav_common.ros.node_tools import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.standard_frames import GRAVITY_MPS2, VELOCITY_NED
+from uav_fault_estimator.standard_frames import VELOCITY_NED
 from uav_fault_msgs.msg import AircraftState, FaultVector
+from uav_sim.frames import GRAVITY_MPS2
 
 pytestmark = pytest.mark.integration
 

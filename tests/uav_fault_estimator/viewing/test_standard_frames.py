@@ -10,11 +10,11 @@ import pytest
 from scipy.spatial.transform import Rotation
 from uav_common.channels import STATE_CHANNELS
 from uav_fault_estimator.standard_frames import (
-    GRAVITY_MPS2,
     GeodeticPoint,
     StandardFrames,
     orientation_xyzw,
 )
+from uav_sim.frames import GRAVITY_MPS2
 
 ORIGIN = GeodeticPoint(55.6, 12.5, 250.0)
 

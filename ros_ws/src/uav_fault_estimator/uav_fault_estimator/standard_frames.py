@@ -26,9 +26,8 @@ import numpy as np
 import pymap3d
 from scipy.spatial.transform import Rotation
 from uav_common.channels import state_indices
-from uav_sim.frames import ned_to_body
+from uav_sim.frames import ned_to_body, specific_force_body_mps2
 
-GRAVITY_MPS2 = 9.80665  # standard gravity, down in NED
 ENU_FROM_NED = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
 FLU_FROM_FRD = np.diag([1.0, -1.0, -1.0])  # its own inverse
 
@@ -118,4 +117,4 @@ class StandardFrames:
         if previous is None or time_s <= previous[0]:
             return np.full(3, np.nan)
         acceleration_ned = (velocity_ned - previous[1]) / (time_s - previous[0])
-        return flu_from_ned(acceleration_ned - np.array([0.0, 0.0, GRAVITY_MPS2]), attitude_rad)
+        return FLU_FROM_FRD @ specific_force_body_mps2(acceleration_ned, *attitude_rad)

@@ -1,9 +1,11 @@
 """Rotations between the local North-East-Down frame and body axes; positions north and
-east of an origin."""
+east of an origin; the specific force an accelerometer reads."""
 
 from __future__ import annotations
 
 import numpy as np
+
+GRAVITY_MPS2 = 9.80665  # standard gravity, down in NED
 
 
 def ned_to_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
@@ -18,6 +20,14 @@ def ned_to_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray
             [cr * sp * cy + sr * sy, cr * sp * sy - sr * cy, cr * cp],
         ]
     )
+
+
+def specific_force_body_mps2(acceleration_ned_mps2: np.ndarray, roll_rad: float,
+                             pitch_rad: float, yaw_rad: float) -> np.ndarray:
+    """The specific force in body axes FRD [m/s^2], an accelerometer's reading (-g along z
+    at rest): C_bn (a - g) for the NED acceleration a [m/s^2]."""
+    gravity_ned = np.array([0.0, 0.0, GRAVITY_MPS2])
+    return ned_to_body(roll_rad, pitch_rad, yaw_rad) @ (acceleration_ned_mps2 - gravity_ned)
 
 
 def air_velocity_body_mps(airspeed_mps, angle_of_attack_rad, sideslip_rad) -> np.ndarray:

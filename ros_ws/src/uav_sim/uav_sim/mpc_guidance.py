@@ -37,9 +37,9 @@ from dataclasses import dataclass
 import numpy as np
 import proxsuite
 
+from uav_sim.frames import GRAVITY_MPS2
 from uav_sim.guidance import WaypointGuidance, wrap_angle
 
-GRAVITY_MPS2 = 9.80665
 # sim_node's /diagnostics keys: the scenario's guidance method, and its steps flown on the
 # vector field because a QP was not solved
 METHOD_KEY, FALLBACKS_KEY = "guidance", "guidance_fallbacks"

@@ -101,13 +101,15 @@ class RegressionFeed:
         value a generator takes (then the next sample has no sample before)."""
         if not on_grid(time_s, self.period_s):
             return None
-        now = GridSample(state, controls, setpoints)
+        now = GridSample(time_s, state, controls, setpoints)
         regression = regressions(self.generators, now, self.previous)
         if regression is None:
             self.skipped_samples += 1
-            # Only the sample before is missing when, given itself as the one before, this
-            # sample is complete: it is then the next sample's sample before.
-            first = self.previous is None and regressions(self.generators, now, now) is not None
+            # Only the sample before is missing when, given itself one period earlier as the
+            # one before, this sample is complete: it is then the next sample's sample before.
+            itself_before = now._replace(time_s=time_s - self.period_s)
+            first = (self.previous is None
+                     and regressions(self.generators, now, itself_before) is not None)
             self.previous = now if first else None
         else:
             self.previous = now

@@ -19,16 +19,22 @@ aircraft's response; the propulsion channel the throttle it needs:
     roll_tracking   p[k] = a (phi_c[k] - phi[k]) + b            the roll loop's response
     pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b        the pitch loop's response
     climb_tracking  h'[k] = a h'_c[k] + b                       the climb the autopilot gets
+    lateral_force   f_y[k] = c                                  the sideslip's side force
     propulsion      throttle[k] = a sin(gamma[k]) + b (1 / cos(phi[k])^2 - 1) + c
 
 p, q, r body rates [rad/s]; da aileron, de elevator, dr rudder [rad]; phi, theta roll and
 pitch and phi_c, theta_c their setpoints [rad]; h' the climb rate (the ground velocity's,
 up) and h'_c the autopilot's commanded one [m/s]; throttle 0..1; gamma the flight-path angle
 from the ground velocity. An engine that stops shows in climb_tracking: the aircraft sinks
-whatever climb its autopilot commands. The propulsion channel is the throttle the autopilot
-needs to hold its speed against the climb it flies and its turns' load factor (n^2 - 1, the
-induced drag's share): a loss of thrust raises it (c, and the residual). Where a failure
-cuts the throttle output itself (ALFA's engine failures), it reads the injection.
+whatever climb its autopilot commands. lateral_force is the body-y specific force f_y
+[m/s^2] (uav_sim.frames), from the ground velocity's change since the sample before: an
+autopilot that coordinates its turns flies with f_y near a constant (the sensors' bias),
+and a rudder stuck off centre holds the aircraft in a sideslip whose side force shows
+within a second, whatever the roll loop does to hide it. The propulsion channel is the
+throttle the autopilot needs to hold its speed against the climb it flies and its turns'
+load factor (n^2 - 1, the induced drag's share): a loss of thrust raises it (c, and the
+residual). Where a failure cuts the throttle output itself (ALFA's engine failures), it
+reads the injection.
 No ROS here.
 """
 
@@ -41,9 +47,10 @@ from typing import NamedTuple
 
 import numpy as np
 from uav_common.channels import CONTROL_CHANNELS, SETPOINT_FIELDS, STATE_CHANNELS
+from uav_sim.frames import specific_force_body_mps2
 
 _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
-_ROLL, _PITCH = STATE_CHANNELS.index("roll"), STATE_CHANNELS.index("pitch")
+_ROLL, _PITCH, _YAW = (STATE_CHANNELS.index(name) for name in ("roll", "pitch", "yaw"))
 _VN, _VE, _VD = (STATE_CHANNELS.index(name)
                   for name in ("velocity_north", "velocity_east", "velocity_down"))
 _AILERON, _ELEVATOR, _RUDDER, _THROTTLE = (CONTROL_CHANNELS.index(name)
@@ -60,10 +67,11 @@ NO_SETPOINTS = np.full(len(SETPOINTS), math.nan)
 
 
 class GridSample(NamedTuple):
-    """One sample on the detector's grid: state (14,) and controls (7,) in uav_common.channels
-    order, setpoints (SETPOINTS order: commanded roll and pitch [rad], commanded vertical
-    velocity, down [m/s]; NaN unknown)."""
+    """One sample on the detector's grid: its time [s], state (14,) and controls (7,) in
+    uav_common.channels order, setpoints (SETPOINTS order: commanded roll and pitch [rad],
+    commanded vertical velocity, down [m/s]; NaN unknown)."""
 
+    time_s: float
     state: np.ndarray
     controls: np.ndarray
     setpoints: np.ndarray
@@ -122,6 +130,14 @@ def _climb_tracking(now: GridSample, before: GridSample | None) -> Regression:
     return np.array([-now.setpoints[_DOWN_SETPOINT], 1.0]), -now.state[_VD]
 
 
+def _lateral_force(now: GridSample, before: GridSample) -> Regression:
+    velocity = [_VN, _VE, _VD]
+    elapsed_s = now.time_s - before.time_s  # > 0: the grid's samples come in time order
+    acceleration_ned_mps2 = (now.state[velocity] - before.state[velocity]) / elapsed_s
+    force = specific_force_body_mps2(acceleration_ned_mps2, *now.state[[_ROLL, _PITCH, _YAW]])
+    return np.array([1.0]), force[1]
+
+
 def _propulsion(now: GridSample, before: GridSample | None) -> Regression:
     velocity_mps = now.state[[_VN, _VE, _VD]]
     climb = -velocity_mps[2] / max(float(np.linalg.norm(velocity_mps)), MIN_SPEED_MPS)
@@ -143,6 +159,7 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("roll_tracking", ("a_rt", "b_rt"), False, _roll_tracking),
     Generator("pitch_tracking", ("a_pt", "b_pt"), False, _pitch_tracking),
     Generator("climb_tracking", ("a_ct", "b_ct"), False, _climb_tracking),
+    Generator("lateral_force", ("c_fy",), True, _lateral_force),
     Generator("propulsion", ("a_tg", "b_tn", "c_t"), False, _propulsion),
 )}
 # The paper's three: the simulated Aerosonde's shipped calibration.
