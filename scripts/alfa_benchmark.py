@@ -18,12 +18,13 @@ ALFA_SETTLE_S unless given (screen_logs.py takes such a calibration; detector_no
 0.995, refuses it), and the named generators (default ALFA_GENERATORS: the roll, pitch and
 climb tracking generators, which read the autopilot's intent and the aircraft's response,
 not the outputs ALFA's injection pins, and the lateral specific force; the propulsion
-channel reads the throttle output an engine failure cuts, so it would count the injection). --schedule auto schedules the
-parameters on airspeed (the ground speed less the wind where the log has no airspeed) when
-the calibration flights span enough of it; the default is none (measured: the same flights
-found, three engine failures first on roll_tracking instead of climb_tracking, delays 0.6 s
-shorter on average). The peer, Keipour et al.'s RLS detector (benchmarks/keipour2019_rls.py),
-runs on the same flights in the same folds unless --no-peer.
+channel reads the throttle output an engine failure cuts, so it would count the injection).
+--schedule auto schedules the parameters on airspeed (the ground speed less the wind where
+the log has no airspeed) when the calibration flights span enough of it; the default is none
+(measured: the same flights found, three engine failures first on roll_tracking instead of
+climb_tracking, delays 0.6 s shorter on average). The peer, Keipour et al.'s RLS detector
+(benchmarks/keipour2019_rls.py), runs on the same flights in the same folds unless
+--no-peer.
 
 Prints, for the project's detector and then the peer, a line per flight, the table per
 failure kind and the summary, counted as ALFA's evaluator counts (a first alarm later than

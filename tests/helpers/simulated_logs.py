@@ -30,11 +30,16 @@ from rosbags.typesys import Stores, get_typestore
 from uav_common.channels import AIR_DATA_CHANNELS, AIR_DATA_FIELDS, CONTROL_CHANNELS, STATE_CHANNELS
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.detector import DetectorFlight
-from uav_fault_estimator.flight_logs.axes import body_rates_frd, quaternions_from_euler
+from uav_fault_estimator.flight_logs.axes import (
+    body_rates_frd,
+    quaternions_from_euler,
+    world_vectors_ned,
+)
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
     BODY_RATES,
+    GROUND_VELOCITY,
     OUTPUTS,
     STREAM_COLUMNS,
     SURFACES,
@@ -71,10 +76,11 @@ TIMINGS: Mapping[str, StreamTiming] = {
     BODY_RATES: StreamTiming(12, 1, 3),  # 10 Hz
     AIRSPEED: StreamTiming(24, 7, 4),  # 5 Hz
     OUTPUTS: StreamTiming(41, 3, 2),  # 2.93 Hz
+    GROUND_VELOCITY: StreamTiming(29, 5, 3),  # 4.14 Hz, as ALFA's local_position/velocity
 }
 # The surfaces in radians (the project's own recordings) at the outputs' instants.
 STREAM_TIMING = {BODY_RATES: BODY_RATES, ATTITUDE: BODY_RATES, AIRSPEED: AIRSPEED,
-                 OUTPUTS: OUTPUTS, SURFACES: OUTPUTS}
+                 OUTPUTS: OUTPUTS, SURFACES: OUTPUTS, GROUND_VELOCITY: GROUND_VELOCITY}
 
 
 @dataclass(frozen=True)
@@ -97,7 +103,8 @@ class LogTruth:
 
 def simulate_truth(scenario: Scenario, seed: int) -> LogTruth:
     """Fly the scenario at 120 Hz and pick each stream's instants (TIMINGS, jitter from
-    seed): body rates, attitude, airspeed (measured, as on board) and the outputs' PWM."""
+    seed): body rates, attitude, airspeed (measured, as on board), the outputs' PWM and the
+    ground velocity."""
     simulation = Simulation(scenario, SENSOR_RATE_HZ)
     samples = [simulation.sample()]
     while not simulation.finished:
@@ -109,10 +116,11 @@ def simulate_truth(scenario: Scenario, seed: int) -> LogTruth:
     rng = np.random.default_rng(seed)
     picks = {name: _instants(timing, len(samples), rng) for name, timing in TIMINGS.items()}
     state_columns = {name: [STATE_CHANNELS.index(c) for c in STREAM_COLUMNS[name]]
-                     for name in (BODY_RATES, ATTITUDE)}
+                     for name in (BODY_RATES, ATTITUDE, GROUND_VELOCITY)}
     values = {
         BODY_RATES: states[:, state_columns[BODY_RATES]],
         ATTITUDE: states[:, state_columns[ATTITUDE]],
+        GROUND_VELOCITY: states[:, state_columns[GROUND_VELOCITY]],
         AIRSPEED: airspeed[:, None],
         OUTPUTS: pwm_outputs(controls),
         SURFACES: controls[:, [CONTROL_CHANNELS.index(c) for c in STREAM_COLUMNS[SURFACES]]],
@@ -254,7 +262,8 @@ def mavros_ros1_typestore():
 
 def write_mavros_bag(path: Path, truth: LogTruth, seed: int) -> float:
     """The flight as a ROS 1 bag of MAVROS topics (topics.MAVROS_TOPICS): sensor_msgs/Imu
-    (FLU rates, ENU/FLU orientation), mavros_msgs/RCOut (PWM) and VFR_HUD (airspeed), stamped
+    (FLU rates, ENU/FLU orientation), mavros_msgs/RCOut (PWM), VFR_HUD (airspeed) and
+    local_position/velocity's TwistStamped (ENU ground velocity), stamped
     at the simulation's instants, logged a random latency later. Returns the bag's start
     (its first log time) in seconds of simulation time, from which a reader counts."""
     typestore = mavros_ros1_typestore()
@@ -299,6 +308,15 @@ def write_mavros_bag(path: Path, truth: LogTruth, seed: int) -> float:
                              airspeed=float(streams[AIRSPEED].values[k, 0]),
                              groundspeed=0.0, heading=0, throttle=0.0, altitude=0.0,
                              climb=0.0),
+                         time_s))
+    velocity = streams[GROUND_VELOCITY]
+    velocity_enu = world_vectors_ned(velocity.values, "FLU")  # its own inverse
+    for k, time_s in enumerate(velocity.times_s):
+        messages.append((topic["velocity"], "geometry_msgs/msg/TwistStamped",
+                         types["geometry_msgs/msg/TwistStamped"](
+                             header=header(time_s, k), twist=types["geometry_msgs/msg/Twist"](
+                                 linear=vector("geometry_msgs/msg/Vector3", velocity_enu[k]),
+                                 angular=vector("geometry_msgs/msg/Vector3", np.zeros(3)))),
                          time_s))
     log_ns = [BAG_START_NS + round(m[3] * 1e9) + int(rng.integers(*LATENCY_NS))
               for m in messages]

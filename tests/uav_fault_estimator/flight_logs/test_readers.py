@@ -19,6 +19,7 @@ from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
     BODY_RATES,
+    GROUND_VELOCITY,
     OUTPUTS,
     SURFACES,
     FlightLog,
@@ -84,8 +85,8 @@ def test_ulog(logs: Logs) -> None:
 
 @pytest.mark.timeout(60)
 def test_mavros_bag_flu_to_frd(logs: Logs) -> None:
-    """The bag holds FLU (q and r negated, ENU attitude); the reader gives FRD. Forced to
-    read it as FRD, q and r come out negated."""
+    """The bag holds FLU (q and r negated, ENU attitude and ground velocity); the reader
+    gives FRD and NED. Forced to read it as FRD, q and r come out negated."""
     bag = logs.folder / "flight.bag"
     with AnyReader([bag]) as reader:
         connection = next(c for c in reader.connections if c.topic == "/mavros/imu/data")
@@ -97,12 +98,13 @@ def test_mavros_bag_flu_to_frd(logs: Logs) -> None:
     log = read_log(bag)
     assert (log.format, log.output_unit, log.airspeed_source) == (
         "ros1_bag", "pwm_us", "indicated")
-    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS}
+    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS, GROUND_VELOCITY}
     truth, start_s = logs.truth, logs.bag_start_s
     assert_stream(log, truth, BODY_RATES, start_s, 1e-9, 0.0)  # float64: exact
     assert_stream(log, truth, ATTITUDE, start_s, 1e-9, 1e-12)
     assert_stream(log, truth, AIRSPEED, start_s, 1e-9, 32 * FLOAT32_ULP)  # VFR_HUD: float32
     assert_stream(log, truth, OUTPUTS, start_s, 1e-9, 0.0)
+    assert_stream(log, truth, GROUND_VELOCITY, start_s, 1e-9, 0.0)  # float64, axes swapped
 
     as_frd = read_log(bag, axes="FRD").streams[BODY_RATES].values
     np.testing.assert_array_equal(as_frd, log.streams[BODY_RATES].values * [1, -1, -1])
@@ -115,13 +117,14 @@ def test_csv_export_equals_the_bag(logs: Logs, layout: str) -> None:
     dotted one, secs/nsecs, time in s, channels as a list) read as the bag does."""
     log = read_log(logs.folder / f"csv_{layout}")
     assert (log.format, log.output_unit, log.airspeed_source) == ("csv", "pwm_us", "indicated")
-    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS}
+    assert set(log.streams) == {BODY_RATES, ATTITUDE, AIRSPEED, OUTPUTS, GROUND_VELOCITY}
     time_tolerance_s = 1e-9 if layout == ROSTOPIC else DOTTED_TIME_S
     truth, start_s = logs.truth, logs.bag_start_s
     assert_stream(log, truth, BODY_RATES, start_s, time_tolerance_s, 0.0)
     assert_stream(log, truth, ATTITUDE, start_s, time_tolerance_s, 1e-12)
     assert_stream(log, truth, AIRSPEED, start_s, time_tolerance_s, 32 * FLOAT32_ULP)
     assert_stream(log, truth, OUTPUTS, start_s, time_tolerance_s, 0.0)
+    assert_stream(log, truth, GROUND_VELOCITY, start_s, time_tolerance_s, 1e-12)
 
 
 @pytest.mark.timeout(60)

@@ -26,7 +26,7 @@ from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
-from uav_fault_estimator.flight_logs.streams import ATTITUDE
+from uav_fault_estimator.flight_logs.streams import ATTITUDE, GROUND_VELOCITY
 from uav_fault_msgs.msg import AircraftState, AirData, AutopilotSetpoints, FaultAlarm
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
@@ -37,7 +37,9 @@ DURATION_S = 60.0  # the detector settles after 30 s
 FAULT_START_S = 40.0  # the aileron loss, moved from 150 s into the flight
 SEED = 17
 ALFA_FLIGHT = "carbonZ_2018-01-01-00-00-00_aileron_fault"  # ALFA's folder naming
-TRACKING_SET = ("roll", "pitch", "yaw", "roll_tracking", "pitch_tracking")
+# the paper's generators and those the ALFA benchmark runs
+TRACKING_SET = ("roll", "pitch", "yaw", "roll_tracking", "pitch_tracking", "climb_tracking",
+                "lateral_force")
 
 
 @pytest.fixture(scope="module")
@@ -62,22 +64,42 @@ def aileron_fault_logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tu
 
 
 def write_nav_info(folder: Path) -> None:
-    """ALFA's nav_info/roll and /pitch for an ALFA flight folder: the measured angle the
-    log's attitude [deg], the commanded one that plus a slow swing (an autopilot's setpoint
-    leads its aircraft), at the attitude's instants in the log's clock."""
+    """ALFA's nav_info/roll, /pitch and /velocity for an ALFA flight folder: the measured
+    values the log's attitude [deg] and ground velocity (NED) [m/s], the commanded ones those
+    plus a slow swing (an autopilot's setpoint leads its aircraft), at their instants in the
+    log's clock."""
     log = read_log(folder)
-    attitude = log.streams[ATTITUDE]
-    stamps_ns = np.round((log.start_stamp_s + attitude.times_s) * 1e9).astype(np.int64)
-    swing_deg = 3.0 * np.sin(attitude.times_s / 2.0)
+    attitude, velocity = log.streams[ATTITUDE], log.streams[GROUND_VELOCITY]
+    header = "%time,field.header.seq,field.header.stamp,field.header.frame_id,"
     for axis, column in (("roll", 0), ("pitch", 1)):
-        measured_deg = np.degrees(attitude.values[:, column])
-        with (folder / f"{folder.name}-mavros-nav_info-{axis}.csv").open("w") as file:
-            file.write("%time,field.header.seq,field.header.stamp,field.header.frame_id,"
-                       "field.commanded,field.measured\n")
-            file.writelines(f"{stamp},{k},{stamp},NED,{float(measured + swing)!r},"
-                            f"{float(measured)!r}\n"
-                            for k, (stamp, measured, swing) in enumerate(
-                                zip(stamps_ns, measured_deg, swing_deg, strict=True)))
+        rows = [[measured + swing, measured] for measured, swing in
+                zip(np.degrees(attitude.values[:, column]), swing_of(attitude.times_s, 3.0),
+                    strict=True)]
+        write_alfa_topic(folder, f"nav_info-{axis}", header + "field.commanded,field.measured",
+                         log.start_stamp_s + attitude.times_s, rows)
+    commanded = velocity.values + swing_of(velocity.times_s, 0.5)[:, None]
+    write_alfa_topic(folder, "nav_info-velocity",
+                     header + "field.coordinate_frame,field.des_x,field.des_y,field.des_z,"
+                     "field.meas_x,field.meas_y,field.meas_z",
+                     log.start_stamp_s + velocity.times_s,
+                     [[1, *c, *m] for c, m in zip(commanded, velocity.values, strict=True)])
+
+
+def swing_of(times_s: np.ndarray, amplitude: float) -> np.ndarray:
+    """A slow swing of the amplitude at the times [s]: a setpoint's lead on its aircraft."""
+    return amplitude * np.sin(times_s / 2.0)
+
+
+def write_alfa_topic(folder: Path, topic: str, header: str, stamps_s: np.ndarray,
+                     rows: list) -> None:
+    """FOLDER-mavros-TOPIC.csv as ALFA exports it: header, then per row its log time and
+    header stamp (both stamps_s, in ns), sequence number, frame NED and the row's fields."""
+    stamps_ns = np.round(stamps_s * 1e9).astype(np.int64)
+    with (folder / f"{folder.name}-mavros-{topic}.csv").open("w") as file:
+        file.write(header + "\n")
+        file.writelines(f"{stamp},{k},{stamp},NED," + ",".join(repr(float(v)) for v in row)
+                        + "\n" for k, (stamp, row) in enumerate(zip(stamps_ns, rows,
+                                                                     strict=True)))
 
 
 @pytest.fixture
@@ -144,8 +166,8 @@ def test_the_tracking_generators_run_through_the_graph_on_the_logs_setpoints(
         aileron_fault_logs, graph, start_process, tmp_path):
     """An ALFA flight folder (the bag's topics, with nav_info setpoints): log_replay_node
     publishes the setpoints, detector_node with a calibration of the paper's generators and
-    the roll and pitch tracking ones (made from the log's part before the fault) gives the
-    core's numbers on every sample."""
+    the ALFA benchmark's (made from the log's part before the fault) gives the core's numbers
+    on every sample."""
     log, _ = aileron_fault_logs["alfa"]
     inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
     before_fault = inputs.times_s < inputs.times_s[0] + 35.0
