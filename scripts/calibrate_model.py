@@ -2,21 +2,25 @@
 """Calibrate the prediction model from recordings of fault-free flights.
 
     python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--parameters A,B,...]
+        [--strict]
 
 RECORDING: a rosbag2 folder (demo.sh's DIR/bag, bringup's or recorder_node's) with /state,
 /controls, /wind/filtered and, where the aircraft has them, /air_data of a flight with no
 fault. Identifies the model's parameters (default: model_parameters.DEFAULT_PARAMETERS; any
 aerodynamic coefficient of aerosonde.xml by name, mass_scale, thrust_scale,
-inertia_{x,y,z}_scale, airspeed_scale, angle_of_attack_deg, sideslip_deg) so that the
-models fit the flights' accelerations (estimation/model_calibration.py), prints each with
-its posterior deviation and the pairs the flights cannot separate, and writes MODEL.yaml for
+inertia_{x,y,z}_scale, cg_{x,y,z}_cm, airspeed_scale, angle_of_attack_deg, sideslip_deg) so
+that the models fit the flights' accelerations (estimation/model_calibration.py), prints
+each with its posterior deviation and the pairs the flights cannot separate, then checks the fit
+(estimation/calibration_check.py: the weighted residual, parameters pushed beyond two prior
+deviations, a residual channel with a structured remainder in a flight regime) and prints a
+WARN line for each finding, naming what it suggests; and writes MODEL.yaml for
 residual_node's model_calibration_file (demo.sh --model-calibration MODEL.yaml) and, beside
 it, MODEL.noise.yaml: the residual noise of the calibrated model on the same flights, per
 sensor suite, for mhe_node's noise_calibration_file (calibrate_estimator.py's file, made
 from these flights instead of simulated ones; MODEL.yaml names it, and demo.sh passes both).
 
-Exit status: 0 written; 1 the least squares did not solve; 2 a bad argument or recording
-(one line each).
+Exit status: 0 written; 1 the least squares did not solve, or --strict and the check warned
+(nothing written); 2 a bad argument or recording (one line each).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.estimation.calibration_check import check_calibration
 from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
 from uav_fault_estimator.estimation.model_file import calibration_dict
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
@@ -55,6 +60,8 @@ def main() -> int:
     parser.add_argument("--out", type=Path, required=True, metavar="MODEL.yaml")
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS),
                         help="comma-separated names (default: %(default)s)")
+    parser.add_argument("--strict", action="store_true",
+                        help="a warning of the fit's check is an error: nothing is written")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
@@ -81,6 +88,14 @@ def main() -> int:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 1
     _print_calibration(calibration)
+    warnings = check_calibration(calibration, flights, load_noise_calibration())
+    for warning in warnings:
+        print(f"WARN {warning.text}")
+    print(f"check: {len(warnings)} warnings" if warnings else "check: the model fits the flights")
+    if warnings and arguments.strict:
+        print(f"calibrate_model.py: --strict and {len(warnings)} warnings of the fit's check: "
+              f"{arguments.out} not written", file=sys.stderr)
+        return 1
     noise_path = arguments.out.with_suffix(".noise.yaml")
     sources = f"{len(flights)} recorded fault-free flights ({minutes:.1f} min): " + ", ".join(
         f.name for f in flights)

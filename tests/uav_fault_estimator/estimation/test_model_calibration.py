@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 import yaml
 from helpers.flights import calm
+from helpers.recordings import write_recording
 from helpers.repo import SCRIPTS
-from uav_common.channels import AIR_DATA_FIELDS, CONTROL_CHANNELS, STATE_CHANNELS
-from uav_common.message_fields import CONTROL_FIELDS, STATE_FIELDS
+from uav_common.channels import STATE_CHANNELS
 from uav_common.package_data import default_parameters
 from uav_fault_estimator.estimation.model_calibration import calibrate, model_file_sha256
 from uav_fault_estimator.estimation.model_file import (
@@ -31,7 +31,6 @@ from uav_fault_estimator.estimation.model_parameters import (
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
 from uav_fault_estimator.offline import sensor_flight
 from uav_fault_estimator.recording.project_bag import (
-    Recording,
     RecordingError,
     project_typestore,
     sensor_flight_from_recording,
@@ -62,12 +61,13 @@ def calibration(flight):
 
 
 def test_a_parameter_change_and_its_value_are_one_another():
-    changes = {"CDmin": 10.0, "mass_scale": -3.0, "inertia_y_scale": 5.0,
+    changes = {"CDmin": 10.0, "mass_scale": -3.0, "inertia_y_scale": 5.0, "cg_y_cm": 1.5,
                "airspeed_scale": 2.0, "angle_of_attack_deg": 0.5}
     aircraft = changed(NOMINAL, changes)
     assert dict(aircraft.coefficients) == {"CDmin": pytest.approx(1.10)}
     assert aircraft.mass_scale == pytest.approx(0.97)
     assert aircraft.inertia_scale == pytest.approx((1.0, 1.05, 1.0))
+    assert aircraft.cg_offset_m == pytest.approx((0.0, 0.015, 0.0))
     assert aircraft.sensor_bias == SensorBias(airspeed_scale=pytest.approx(1.02),
                                               angle_of_attack_deg=0.5)
     assert values_of(aircraft, tuple(changes)) == pytest.approx(changes)
@@ -131,43 +131,6 @@ def test_a_calibration_that_cannot_be_used_is_one_line(tmp_path, changes, words)
         load_model_calibration(path)
     message = str(raised.value)
     assert words in message and str(path) in message and "\n" not in message
-
-
-def write_recording(path: Path, flight, seeded_pct: float = 0.0) -> Path:
-    """The flight as recorder_node records sim_node's streams."""
-    typestore = project_typestore()
-    types = typestore.types
-    recording = Recording(path, typestore)
-    topics = {"/state": "AircraftState", "/controls": "ControlInputs",
-              "/wind/filtered": "WindEstimate", "/air_data": "AirData",
-              "/faults/seeded": "FaultVector"}
-    try:
-        for topic, name in topics.items():
-            recording.add_topic(topic, f"uav_fault_msgs/msg/{name}")
-        for k, time_s in enumerate(flight.times_s):
-            stamp_ns = round(time_s * 1e9)
-            header = types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](
-                sec=stamp_ns // 1_000_000_000, nanosec=stamp_ns % 1_000_000_000), frame_id="")
-            fields = {
-                "/state": dict(zip(STATE_FIELDS, map(float, flight.states[k]), strict=True)),
-                "/controls": {f: bool(v) if c == "ignition" else float(v) for f, c, v in zip(
-                    CONTROL_FIELDS, CONTROL_CHANNELS, flight.controls[k], strict=True)},
-                "/wind/filtered": {"north_mps": float(flight.winds_ned_mps[k, 0]),
-                                   "east_mps": float(flight.winds_ned_mps[k, 1]),
-                                   "down_mps": float(flight.winds_ned_mps[k, 2]),
-                                   "filter_time_constant_s": 10.0},
-                "/air_data": dict(zip(AIR_DATA_FIELDS, map(float, flight.air_data[k]),
-                                      strict=True)),
-                "/faults/seeded": {"names": ["right_wing_lift_loss"],
-                                   "values_pct": np.array([seeded_pct if time_s > 10.0 else 0.0])},
-            }
-            for topic, name in topics.items():
-                message = types[f"uav_fault_msgs/msg/{name}"](header=header, **fields[topic])
-                recording.write(topic, stamp_ns, typestore.serialize_cdr(
-                    message, f"uav_fault_msgs/msg/{name}"))
-    finally:
-        recording.close()
-    return path
 
 
 @pytest.fixture(scope="module")

@@ -48,7 +48,7 @@ from uav_fault_estimator.estimation.residuals import (
     ResidualSample,
 )
 
-MAX_STEPS = 6  # Gauss-Newton steps at most
+MAX_STEPS = 10  # Gauss-Newton steps at most (sixteen parameters take about seven)
 CONVERGED_SIGMAS = 0.05  # a step below this many posterior deviations in each parameter ends it
 WORST_CORRELATIONS = 5  # pairs printed and written
 
@@ -111,19 +111,29 @@ def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str
     return FlightTerms(gram, linear, chi_square, rows)
 
 
+@dataclass(frozen=True)
+class SuiteResiduals:
+    """A flight's residuals at one model per noise suite: rows (K, 6) and their times (K,)
+    [s]."""
+
+    residuals: dict[str, np.ndarray]
+    times_s: dict[str, np.ndarray]
+
+
 def noise_residuals(flight: SensorFlight, model: FlownAircraft,
-                    residual_parameters: Mapping[str, Any]) -> dict[str, np.ndarray]:
-    """The model's residuals (K, 6) per noise suite on the flight: the samples that flew the
-    air data, and the whole flight flown again on the filtered wind alone (the other suite's
+                    residual_parameters: Mapping[str, Any]) -> SuiteResiduals:
+    """The model's residuals per noise suite on the flight: the samples that flew the air
+    data, and the whole flight flown again on the filtered wind alone (the other suite's
     noise from the same flight)."""
-    flown = {}
+    residuals, times = {}, {}
     for suite, air_data in ((SUITES[WIND_AIR_DATA], flight.air_data),
                             (SUITES[WIND_FILTERED], np.full_like(flight.air_data, np.nan))):
-        samples = _grid_samples(_generator(model, (), residual_parameters), flight,
-                                residual_parameters, air_data)
-        flown[suite] = np.array([s.residual for s in samples
-                                 if SUITES[s.wind_source] == suite]).reshape(-1, 6)
-    return flown
+        samples = [s for s in _grid_samples(_generator(model, (), residual_parameters), flight,
+                                            residual_parameters, air_data)
+                   if SUITES[s.wind_source] == suite]
+        residuals[suite] = np.array([s.residual for s in samples]).reshape(-1, 6)
+        times[suite] = np.array([s.time_s for s in samples])
+    return SuiteResiduals(residuals, times)
 
 
 def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
@@ -168,7 +178,8 @@ class ModelCalibration:
     """A calibrated model: the aircraft its copies load, and per parameter (names order) its
     unit, value, prior deviation and posterior deviation [its unit], the posterior correlations
     (n, n), the Gauss-Newton steps taken, the fit's reduced chi-square, and the residuals per
-    suite and flight at the calibrated model (for the noise calibration)."""
+    suite and flight at the calibrated model (for the noise calibration) with their times
+    (for the fit's check, calibration_check.py)."""
 
     aircraft: FlownAircraft
     names: tuple[str, ...]
@@ -180,6 +191,7 @@ class ModelCalibration:
     steps: int
     reduced_chi_square: float
     residuals: dict[str, list[np.ndarray]]
+    residual_times_s: dict[str, list[np.ndarray]]
 
     def worst_correlations(self, count: int = WORST_CORRELATIONS) -> list[tuple[str, str, float]]:
         """The most correlated parameter pairs, largest |correlation| first."""
@@ -236,14 +248,17 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
         values=np.array(list(values_of(model, names).values())),
         prior_std=np.array([p.prior_std for p in parameters]), posterior_std=deviation,
         correlations=covariance / np.outer(deviation, deviation), steps=step,
-        reduced_chi_square=reduced,
-        residuals=_per_suite(map_flights(_NoiseAt(model, residual_parameters), flights)))
+        reduced_chi_square=reduced, **_per_suite(map_flights(_NoiseAt(model, residual_parameters),
+                                                             flights)))
 
 
-def _per_suite(flights: Iterable[dict[str, np.ndarray]]) -> dict[str, list[np.ndarray]]:
-    """Per suite, the flights' residuals."""
+def _per_suite(flights: Iterable[SuiteResiduals]) -> dict[str, dict[str, list[np.ndarray]]]:
+    """Per suite, the flights' residuals and their times (ModelCalibration's fields)."""
     flights = list(flights)
-    return {suite: [flight[suite] for flight in flights] for suite in SUITES.values()}
+    return {"residuals": {suite: [f.residuals[suite] for f in flights]
+                          for suite in SUITES.values()},
+            "residual_times_s": {suite: [f.times_s[suite] for f in flights]
+                                 for suite in SUITES.values()}}
 
 
 @dataclass(frozen=True)
@@ -267,7 +282,7 @@ class _NoiseAt:
     model: FlownAircraft
     residual_parameters: Mapping[str, Any]
 
-    def __call__(self, flight: SensorFlight) -> dict[str, np.ndarray]:
+    def __call__(self, flight: SensorFlight) -> SuiteResiduals:
         return noise_residuals(flight, self.model, self.residual_parameters)
 
 

@@ -10,11 +10,12 @@ So the nominal model is 0 in every parameter, and a calibrated model is a FlownA
 - every aerodynamic coefficient of aerosonde.xml by its name there (coefficient_names());
 - mass_scale, thrust_scale, inertia_{x,y,z}_scale: of the empty mass, the propeller's thrust
   and the empty inertia about each body axis;
+- cg_x_cm, cg_y_cm, cg_z_cm: the empty CG's offset along each body axis [cm] (a payload
+  off the centre line rolls the aircraft, which no coefficient of the file can take);
 - airspeed_scale, angle_of_attack_deg, sideslip_deg: the air-data sensors' errors, which the
   residual generator takes out of the measured air data.
 
-The CG offset is not a parameter: on these data it acts as Cm0 and Cmalpha changes (and Cn0,
-Cl0 sideways), which the coefficients take. No ROS here.
+No ROS here.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 
 from uav_sim.flown_aircraft import (
     BIAS_LIMIT_DEG,
+    CG_OFFSET_LIMIT_M,
     SCALE_RANGE,
     FlownAircraft,
     coefficient_names,
@@ -32,18 +34,22 @@ from uav_sim.flown_aircraft import (
 
 MASS_AND_THRUST = ("mass_scale", "thrust_scale")
 INERTIA = ("inertia_x_scale", "inertia_y_scale", "inertia_z_scale")
+CG = ("cg_x_cm", "cg_y_cm", "cg_z_cm")
+CG_PRIOR_STD_CM = 2.0  # a CG is known within about this much per axis
 # SensorBias's fields, in its units (a scale, degrees)
 AIR_DATA_BIASES = ("airspeed_scale", "angle_of_attack_deg", "sideslip_deg")
-# What calibrate_model.py identifies unless told otherwise: what the flights of a normal
-# mission (straight legs and turns at a few airspeeds, fault-free) separate, measured on three
-# such flights (docs/model_calibration.md): every pair's posterior correlation below 0.95
-# but one (CL0 with the vane bias, 0.95). Left out by default, each for the pair it makes:
-# mass_scale (with CLalpha 0.988: lift over mass is what level flight sees, and thrust 0.96),
-# CDinduced (with CL0 -0.97), Cmde (with Cmalpha 0.985: trim ties elevator to alpha),
-# airspeed_scale (dynamic pressure scales every force alike). A lateral set (Clbeta, Cnbeta,
-# Clda, Clp, Cnr, ...) may be asked for by name; the wing faults barely see it.
-DEFAULT_PARAMETERS = ("CL0", "CLalpha", "CDmin", "Cm0", "Cmalpha", "thrust_scale",
-                      "angle_of_attack_deg")
+# What calibrate_model.py identifies unless told otherwise: what a real airframe differs in
+# that three ordinary fault-free flights show (docs/model_calibration.md), the weak ones held
+# near their prior rather than left out, so that a difference in one of them is not pushed
+# into another. Pairs the flights cannot separate (|correlation| above 0.95: mass_scale and
+# thrust_scale, Cmalpha and Cmde, CL0 with CDinduced and the alpha vane's bias) are split by
+# the prior. Left out: the inertias (the residual generator's filtered angular accelerations
+# make the model's own flights fit them at +25-40 %, a bias of the method, not of the
+# aircraft).
+DEFAULT_PARAMETERS = ("CL0", "CLalpha", "CDmin", "CDinduced", "Cm0", "Cmalpha", "Cmq", "Cmde",
+                      "Clp", "Clda", "Cnbeta", "Cnr", "mass_scale", "thrust_scale", "cg_x_cm",
+                      "cg_y_cm", "cg_z_cm", "airspeed_scale", "angle_of_attack_deg",
+                      "sideslip_deg")
 SCALE_STEP_PCT = 1.0  # secant step of a scale [%]
 BIAS_STEP_DEG = 0.2  # secant step of a vane bias [deg]
 _SCALE_LIMITS_PCT = (100.0 * (SCALE_RANGE[0] - 1.0), 100.0 * (SCALE_RANGE[1] - 1.0))
@@ -64,7 +70,7 @@ class ModelParameter:
     def native_per_unit(self) -> float:
         """The FlownAircraft field's change per unit of the parameter: a scale's per %, 0.01;
         a bias's per degree, 1."""
-        return 0.01 if self.unit == "%" else 1.0
+        return 0.01 if self.unit in ("%", "cm") else 1.0
 
     @property
     def is_bias(self) -> bool:
@@ -74,7 +80,7 @@ class ModelParameter:
 
 def parameter_names() -> tuple[str, ...]:
     """Every parameter a calibration can identify, coefficients first in the file's order."""
-    return coefficient_names() + MASS_AND_THRUST + INERTIA + AIR_DATA_BIASES
+    return coefficient_names() + MASS_AND_THRUST + INERTIA + CG + AIR_DATA_BIASES
 
 
 def model_parameter(name: str) -> ModelParameter:
@@ -82,6 +88,10 @@ def model_parameter(name: str) -> ModelParameter:
     if name not in parameter_names():
         raise ValueError(f"unknown model parameter '{name}'; known: "
                          f"{', '.join(parameter_names())}")
+    if name in CG:
+        limit_cm = 100.0 * CG_OFFSET_LIMIT_M
+        return ModelParameter(name, "cm", prior_std=CG_PRIOR_STD_CM, step=SCALE_STEP_PCT,
+                              bounds=(-limit_cm, limit_cm))
     if name.endswith("_deg"):
         return ModelParameter(name, "deg", prior_std=1.0, step=BIAS_STEP_DEG,
                               bounds=(-BIAS_LIMIT_DEG, BIAS_LIMIT_DEG))
@@ -95,7 +105,7 @@ def model_parameter(name: str) -> ModelParameter:
 def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircraft:
     """The aircraft with each named parameter moved by its change [its unit]."""
     coefficients = dict(aircraft.coefficients)
-    inertia = list(aircraft.inertia_scale)
+    inertia, cg = list(aircraft.inertia_scale), list(aircraft.cg_offset_m)
     fields: dict[str, object] = {}
     bias: dict[str, float] = {}
     for name, change in changes.items():
@@ -105,13 +115,16 @@ def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircr
             coefficients[name] = coefficients.get(name, 1.0) + step
         elif name in INERTIA:
             inertia[INERTIA.index(name)] += step
+        elif name in CG:
+            cg[CG.index(name)] += step
         elif parameter.is_bias:
             bias[name] = getattr(aircraft.sensor_bias, name) + step
         else:
             fields[name] = getattr(aircraft, name) + step
     return dataclasses.replace(
         aircraft, coefficients=tuple(coefficients.items()), inertia_scale=tuple(inertia),
-        sensor_bias=dataclasses.replace(aircraft.sensor_bias, **bias), **fields)
+        cg_offset_m=tuple(cg), sensor_bias=dataclasses.replace(aircraft.sensor_bias, **bias),
+        **fields)
 
 
 def values_of(aircraft: FlownAircraft, names: tuple[str, ...]) -> dict[str, float]:
@@ -124,6 +137,8 @@ def values_of(aircraft: FlownAircraft, names: tuple[str, ...]) -> dict[str, floa
             value = coefficients.get(name, 1.0)
         elif name in INERTIA:
             value = aircraft.inertia_scale[INERTIA.index(name)]
+        elif name in CG:
+            value = aircraft.cg_offset_m[CG.index(name)]
         elif name in AIR_DATA_BIASES:
             value = getattr(aircraft.sensor_bias, name)
         else:

@@ -1,0 +1,218 @@
+#!/usr/bin/env python3
+"""The model calibration on aircraft nobody chose: random airframes, calibrated and flown.
+
+    python -m studies.random_aircraft [--count 40] [--seed 1] [--parameters A,B,...]
+        [--json FILE] [--workers N]
+
+Draws --count aircraft at random (numpy's generator seeded with --seed, one stream per
+aircraft) from the scenario `aircraft:` block's parameters, each uniform within DRAW: empty
+mass +-5 %, inertia about each axis +-10 %, CG +-2 cm per axis, thrust +-5 %, every one of
+aerosonde.xml's aerodynamic coefficients +-15 %, the pitot's scale +-3 %, the vanes' biases
++-0.6 deg; plus the model's own aircraft (`model`, every parameter nominal). Each aircraft,
+through the offline chain (uav_fault_estimator.offline), as studies/model_error.py does it
+through the graph: three fault-free calibration flights (model_error.CALIBRATION_FLIGHTS:
+22, 25 and 28 m/s, seeds 501-503, winds of 5-6 m/s from three directions), the model
+calibration (estimation/model_calibration.py, --parameters or the default set) and its
+check (estimation/calibration_check.py), then two test flights of the calibrated model, the
+shipped fault_free and default scenarios (seed 7, the paper's wind), judged against the
+default targets (TARGETS). Prints a line per aircraft and the totals: how many meet the
+targets, and whether each that does not was flagged by the check. Aircraft run one per
+worker (the campaign layer); about 1.5 minutes each on one core.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.campaigns import (
+    Campaign,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
+from uav_fault_estimator.estimation.calibration_check import check_calibration
+from uav_fault_estimator.estimation.model_calibration import calibrate
+from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
+from uav_fault_estimator.estimation.noise_model import load_noise_calibration
+from uav_fault_estimator.offline import fly_and_estimate, sensor_flight, wind_variant
+from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
+from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
+
+from studies.model_error import CALIBRATION_FLIGHTS
+
+# Half-widths of the uniform draws, about the model's values
+DRAW = {"mass_scale": 0.05, "inertia_scale": 0.10, "cg_offset_m": 0.02, "thrust_scale": 0.05,
+        "coefficient": 0.15, "airspeed_scale": 0.03, "vane_bias_deg": 0.6}
+# The default targets (docs/design.md, Metrics): fault-free largest estimate below the
+# detection threshold; per seeded fault RMS error at most this share of its magnitude, found
+# within this many seconds, final estimate within this share of the magnitude; no false alarm.
+RMSE_SHARE, DETECTED_WITHIN_S, FINAL_SHARE = 0.15, 10.0, 0.10
+MODEL = "model"
+
+
+def drawn_aircraft(seed: int, index: int) -> FlownAircraft:
+    """Aircraft number index of the study seeded with seed (its own random stream)."""
+    rng = np.random.default_rng([seed, index])
+
+    def around(value: float, half_width: float, size: int | None = None):
+        return value + rng.uniform(-half_width, half_width, size)
+
+    return FlownAircraft(
+        mass_scale=float(around(1.0, DRAW["mass_scale"])),
+        inertia_scale=tuple(float(v) for v in around(1.0, DRAW["inertia_scale"], 3)),
+        cg_offset_m=tuple(float(v) for v in around(0.0, DRAW["cg_offset_m"], 3)),
+        thrust_scale=float(around(1.0, DRAW["thrust_scale"])),
+        coefficients=tuple((name, float(around(1.0, DRAW["coefficient"])))
+                           for name in coefficient_names()),
+        sensor_bias=SensorBias(float(around(1.0, DRAW["airspeed_scale"])),
+                               float(around(0.0, DRAW["vane_bias_deg"])),
+                               float(around(0.0, DRAW["vane_bias_deg"]))))
+
+
+def calibration_scenarios(aircraft: FlownAircraft) -> list[Scenario]:
+    """The three calibration flights of the aircraft."""
+    base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
+    flights = []
+    for airspeed_mps, seed, towards_deg, wind_mps in CALIBRATION_FLIGHTS:
+        flight = wind_variant(base, seed, towards_deg, wind_mps)
+        flights.append(dataclasses.replace(
+            flight, aircraft=aircraft,
+            initial=dataclasses.replace(flight.initial, airspeed_mps=airspeed_mps)))
+    return flights
+
+
+def test_metrics(aircraft: FlownAircraft, model: FlownAircraft) -> dict[str, tuple]:
+    """(faults, false alarms) of the fault_free and default test flights of the aircraft,
+    the models being `model`."""
+    return {base: fault_metrics(*fly_and_estimate(dataclasses.replace(
+        load_scenario(default_scenario_path().parent / f"{base}.yaml"), aircraft=aircraft),
+        model=model), SETTLE_S, THRESHOLD_PCT) for base in ("fault_free", "default")}
+
+
+def missed_targets(tests: dict[str, tuple]) -> list[str]:
+    """Each default target the test flights miss, one phrase each (empty: all met)."""
+    missed = []
+    fault_free, fault_free_alarms = tests["fault_free"]
+    default, default_alarms = tests["default"]
+    for name, fault in fault_free.items():
+        if fault["max_abs_error_pct"] >= THRESHOLD_PCT:
+            missed.append(f"fault-free {name} {fault['max_abs_error_pct']:.2f} %")
+    missed += [f"false alarm {name}" for name in fault_free_alarms + default_alarms]
+    for name, fault in default.items():
+        magnitude = fault["seeded_final_pct"]
+        if not fault["seeded"] or magnitude < THRESHOLD_PCT:
+            continue
+        if fault["rmse_pct"] > RMSE_SHARE * magnitude:
+            missed.append(f"{name} RMS {fault['rmse_pct']:.2f} % of {magnitude:g}")
+        delay = fault["detection_delay_s"]
+        if delay is None or delay > DETECTED_WITHIN_S:
+            missed.append(f"{name} found {'never' if delay is None else f'{delay:g} s'}")
+        if abs(fault["estimate_final_pct"] - magnitude) > FINAL_SHARE * magnitude:
+            missed.append(f"{name} final {fault['estimate_final_pct']:.2f} % for {magnitude:g}")
+    return missed
+
+
+@dataclasses.dataclass(frozen=True)
+class AircraftTask:
+    """One aircraft of the study: its name, what is flown, the parameters fitted."""
+
+    name: str
+    aircraft: FlownAircraft
+    parameters: tuple[str, ...]
+
+
+def study_aircraft(task: AircraftTask) -> dict:
+    """Calibrate, check, fly the test flights and judge them (the module docstring)."""
+    started = time.monotonic()
+    flights = [sensor_flight(scenario) for scenario in calibration_scenarios(task.aircraft)]
+    calibration = calibrate(flights, task.parameters,
+                            default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                            load_noise_calibration(), log=lambda line: None)
+    warnings = check_calibration(calibration, flights, load_noise_calibration())
+    tests = test_metrics(task.aircraft, calibration.aircraft)
+    missed = missed_targets(tests)
+    fault_free, default = tests["fault_free"][0], tests["default"][0]
+    return {
+        "name": task.name, "flown": task.aircraft.to_dict(),
+        "weighted_residual_per_row": round(calibration.reduced_chi_square, 3),
+        "steps": calibration.steps,
+        "calibrated": {name: [round(float(v), 3), round(float(s), 3)] for name, v, s in zip(
+            calibration.names, calibration.values, calibration.posterior_std, strict=True)},
+        "check": [warning.text for warning in warnings],
+        "fault_free_largest_pct": {n: f["max_abs_error_pct"] for n, f in fault_free.items()},
+        "default_final_pct": {n: f["estimate_final_pct"] for n, f in default.items()},
+        "default_rmse_pct": {n: f["rmse_pct"] for n, f in default.items()},
+        "default_delay_s": {n: f["detection_delay_s"] for n, f in default.items()},
+        "false_alarms": tests["fault_free"][1] + tests["default"][1],
+        "missed": missed, "meets_targets": not missed, "flagged": bool(warnings),
+        "wall_s": round(time.monotonic() - started, 1)}
+
+
+def summary(rows: list[dict]) -> dict:
+    """The totals over the drawn aircraft (the model's own apart)."""
+    drawn = [row for row in rows if row["name"] != MODEL]
+    failing = [row for row in drawn if not row["meets_targets"]]
+    return {"aircraft": len(drawn), "meet_targets": len(drawn) - len(failing),
+            "failing_flagged": sum(row["flagged"] for row in failing),
+            "failing_not_flagged": [row["name"] for row in failing if not row["flagged"]],
+            "meeting_flagged": sum(row["flagged"] for row in drawn if row["meets_targets"])}
+
+
+def print_row(row: dict) -> None:
+    verdict = "meets" if row["meets_targets"] else "misses: " + "; ".join(row["missed"])
+    flag = f"flagged ({len(row['check'])})" if row["flagged"] else "not flagged"
+    print(f"{row['name']:<6} residual {row['weighted_residual_per_row']:.2f}/row, {flag}; "
+          f"fault-free largest {max(row['fault_free_largest_pct'].values()):.2f} %; "
+          f"{verdict}", flush=True)
+    for text in row["check"]:
+        print(f"         WARN {text}")
+
+
+@exit_on_failed_tasks
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--count", type=int, default=40)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
+    parser.add_argument("--json", type=Path)
+    add_campaign_arguments(parser)
+    arguments = parser.parse_args()
+    parameters = tuple(name.strip() for name in arguments.parameters.split(",") if name.strip())
+    for name in parameters:
+        model_parameter(name)
+    tasks = [AircraftTask(MODEL, NOMINAL, parameters)] + [
+        AircraftTask(f"#{k}", drawn_aircraft(arguments.seed, k), parameters)
+        for k in range(1, arguments.count + 1)]
+    started = time.monotonic()
+    with Campaign(campaign_options(arguments)) as campaign:
+        rows = campaign.results(study_aircraft, tasks, "aircraft")
+    for row in rows:
+        print_row(row)
+    totals = summary(rows)
+    print(f"{totals['meet_targets']} of {totals['aircraft']} drawn aircraft meet the targets; "
+          f"of those that do not, {totals['failing_flagged']} flagged by the check "
+          f"(not: {', '.join(totals['failing_not_flagged']) or 'none'}); "
+          f"{totals['meeting_flagged']} flagged that meet them")
+    if arguments.json:
+        arguments.json.write_text(json.dumps({
+            "count": arguments.count, "seed": arguments.seed, "parameters": list(parameters),
+            "draw": DRAW, "targets": {"fault_free_below_pct": THRESHOLD_PCT,
+                                      "rmse_share": RMSE_SHARE,
+                                      "detected_within_s": DETECTED_WITHIN_S,
+                                      "final_share": FINAL_SHARE},
+            "wall_time_s": round(time.monotonic() - started, 1),
+            "summary": totals, "aircraft": rows}, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
