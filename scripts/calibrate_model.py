@@ -78,17 +78,18 @@ def main() -> int:
         return 2
     minutes = sum(f.times_s[-1] - f.times_s[0] for f in flights) / 60.0
     print(f"{len(flights)} flights, {minutes:.1f} min; parameters {', '.join(names)}")
+    noise = load_noise_calibration()
     try:
         with Campaign(campaign_options(arguments)) as campaign:
             calibration = calibrate(
                 flights, names, default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                load_noise_calibration(),
+                noise,
                 map_flights=functools.partial(campaign.results, name="recorded flights"))
     except CalibrationError as error:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 1
     _print_calibration(calibration)
-    warnings = check_calibration(calibration, flights, load_noise_calibration())
+    warnings = check_calibration(calibration, flights, noise)
     for warning in warnings:
         print(f"WARN {warning.text}")
     print(f"check: {len(warnings)} warnings" if warnings else "check: the model fits the flights")

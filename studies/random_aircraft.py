@@ -134,10 +134,11 @@ def study_aircraft(task: AircraftTask) -> dict:
     """Calibrate, check, fly the test flights and judge them (the module docstring)."""
     started = time.monotonic()
     flights = [sensor_flight(scenario) for scenario in calibration_scenarios(task.aircraft)]
+    noise = load_noise_calibration()
     calibration = calibrate(flights, task.parameters,
                             default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                            load_noise_calibration(), log=lambda line: None)
-    warnings = check_calibration(calibration, flights, load_noise_calibration())
+                            noise, log=lambda line: None)
+    warnings = check_calibration(calibration, flights, noise)
     tests = test_metrics(task.aircraft, calibration.aircraft)
     missed = missed_targets(tests)
     fault_free, default = tests["fault_free"][0], tests["default"][0]

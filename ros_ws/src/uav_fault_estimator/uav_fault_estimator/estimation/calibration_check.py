@@ -108,8 +108,7 @@ def _structured(calibration: ModelCalibration, flights: Sequence[SensorFlight],
     residuals = calibration.residuals[suite]
     labels = [regimes(flight, times) for flight, times in
               zip(flights, calibration.residual_times_s[suite], strict=True)]
-    pooled = np.concatenate(residuals) if residuals else np.zeros((0, 6))
-    pooled_labels = np.concatenate(labels) if labels else np.zeros(0, dtype=str)
+    pooled, pooled_labels = np.concatenate(residuals), np.concatenate(labels)  # a flight or more
     found = []
     for regime in REGIMES:
         rows = pooled[pooled_labels == regime]

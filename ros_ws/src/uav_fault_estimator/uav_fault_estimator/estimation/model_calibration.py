@@ -48,7 +48,7 @@ from uav_fault_estimator.estimation.residuals import (
     ResidualSample,
 )
 
-MAX_STEPS = 10  # Gauss-Newton steps at most (sixteen parameters take about seven)
+MAX_STEPS = 10  # Gauss-Newton steps at most (the default set takes six to nine)
 CONVERGED_SIGMAS = 0.05  # a step below this many posterior deviations in each parameter ends it
 WORST_CORRELATIONS = 5  # pairs printed and written
 
