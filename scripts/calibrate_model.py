@@ -2,7 +2,7 @@
 """Calibrate the prediction model from recordings of fault-free flights.
 
     python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--parameters A,B,...]
-        [--strict]
+        [--measured AIRCRAFT.yaml] [--strict]
 
 RECORDING: a rosbag2 folder (demo.sh's DIR/bag, bringup's or recorder_node's) with /state,
 /controls, /wind/filtered and, where the aircraft has them, /air_data of a flight with no
@@ -18,6 +18,12 @@ residual_node's model_calibration_file (demo.sh --model-calibration MODEL.yaml) 
 it, MODEL.noise.yaml: the residual noise of the calibrated model on the same flights, per
 sensor suite, for mhe_node's noise_calibration_file (calibrate_estimator.py's file, made
 from these flights instead of simulated ones; MODEL.yaml names it, and demo.sh passes both).
+
+AIRCRAFT.yaml: what was measured of the aircraft on the ground, as a scenario's `aircraft:`
+block under the key `aircraft` (say cg_offset_m from a balance, inertia_scale from a
+pendulum): the fit starts from it and holds what it does not fit there. The flights cannot
+tell the CG along x and z or the inertias from the coefficients (docs/model_calibration.md),
+and a fault's signature depends on them: measure them where you can.
 
 Exit status: 0 written; 1 the least squares did not solve, or --strict and the check warned
 (nothing written); 2 a bad argument or recording (one line each).
@@ -40,7 +46,7 @@ from uav_fault_estimator.campaigns import (
 )
 from uav_fault_estimator.estimation.calibration_check import check_calibration
 from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
-from uav_fault_estimator.estimation.model_file import calibration_dict
+from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
 from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
 from uav_fault_estimator.offline import write_calibration
@@ -49,6 +55,7 @@ from uav_fault_estimator.recording.project_bag import (
     project_typestore,
     sensor_flight_from_recording,
 )
+from uav_sim.flown_aircraft import NOMINAL
 
 INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
 
@@ -60,6 +67,8 @@ def main() -> int:
     parser.add_argument("--out", type=Path, required=True, metavar="MODEL.yaml")
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS),
                         help="comma-separated names (default: %(default)s)")
+    parser.add_argument("--measured", type=Path, metavar="AIRCRAFT.yaml",
+                        help="the aircraft as measured on the ground (`aircraft:` block)")
     parser.add_argument("--strict", action="store_true",
                         help="a warning of the fit's check is an error: nothing is written")
     add_campaign_arguments(parser)
@@ -71,6 +80,7 @@ def main() -> int:
             model_parameter(name)
         if len(set(names)) != len(names) or not names:
             raise ValueError(f"--parameters must name each parameter once, got {names}")
+        measured = load_measured_aircraft(arguments.measured) if arguments.measured else NOMINAL
         typestore = project_typestore()
         flights = [sensor_flight_from_recording(bag, typestore) for bag in arguments.recordings]
     except (ValueError, RecordingError) as error:
@@ -84,7 +94,8 @@ def main() -> int:
             calibration = calibrate(
                 flights, names, default_parameters("uav_fault_estimator", "residual_node.yaml"),
                 noise,
-                map_flights=functools.partial(campaign.results, name="recorded flights"))
+                map_flights=functools.partial(campaign.results, name="recorded flights"),
+                measured=measured)
     except CalibrationError as error:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 1
@@ -114,10 +125,10 @@ def main() -> int:
 def _print_calibration(calibration) -> None:
     """Each parameter with its posterior deviation, and the worst-correlated pairs."""
     print(f"{'parameter':<22}{'value':>9}{'+-':>8}  unit  (prior +- deviation)")
-    for name, unit, value, posterior, prior in zip(
-            calibration.names, calibration.units, calibration.values,
-            calibration.posterior_std, calibration.prior_std, strict=True):
-        print(f"{name:<22}{value:>9.3f}{posterior:>8.3f}  {unit:<4}  (0 +- {prior:g})")
+    for name, unit, value, posterior, mean, prior in zip(
+            calibration.names, calibration.units, calibration.values, calibration.posterior_std,
+            calibration.prior_mean, calibration.prior_std, strict=True):
+        print(f"{name:<22}{value:>9.3f}{posterior:>8.3f}  {unit:<4}  ({mean:g} +- {prior:g})")
     print(f"{calibration.steps} Gauss-Newton steps, reduced chi-square "
           f"{calibration.reduced_chi_square:.3f}")
     for first, second, value in calibration.worst_correlations():

@@ -11,7 +11,9 @@ aerosonde.xml's aerodynamic coefficients +-15 %, the pitot's scale +-3 %, the va
 +-0.6 deg; plus the model's own aircraft (`model`, every parameter nominal). Each aircraft,
 through the offline chain (uav_fault_estimator.offline), as studies/model_error.py does it
 through the graph: three fault-free calibration flights (model_error.CALIBRATION_FLIGHTS:
-22, 25 and 28 m/s, seeds 501-503, winds of 5-6 m/s from three directions), the model
+22, 25 and 28 m/s, winds of 5-6 m/s from three directions; seeds 501-503 for the model's own
+aircraft, plus SEED_STRIDE times its number for a drawn one, so that no two aircraft share
+their turbulence and sensor noise), the model
 calibration (estimation/model_calibration.py, --parameters or the default set) and its
 check (estimation/calibration_check.py), then two test flights of the calibrated model, the
 shipped fault_free and default scenarios (seed 7, the paper's wind), judged against the
@@ -57,6 +59,10 @@ DRAW = {"mass_scale": 0.05, "inertia_scale": 0.10, "cg_offset_m": 0.02, "thrust_
 # within this many seconds, final estimate within this share of the magnitude; no false alarm.
 RMSE_SHARE, DETECTED_WITHIN_S, FINAL_SHARE = 0.15, 10.0, 0.10
 MODEL = "model"
+SEED_STRIDE = 1000  # calibration flight seeds of aircraft k: the model's plus k times this
+# With --measured-mass-properties: half-widths of the ground measurement's error, uniform
+# (a CG on a balance within a few millimetres, an inertia from a pendulum within a few %)
+MEASUREMENT_ERROR = {"cg_offset_m": 0.003, "inertia_scale": 0.03}
 
 
 def drawn_aircraft(seed: int, index: int) -> FlownAircraft:
@@ -78,12 +84,25 @@ def drawn_aircraft(seed: int, index: int) -> FlownAircraft:
                                float(around(0.0, DRAW["vane_bias_deg"]))))
 
 
-def calibration_scenarios(aircraft: FlownAircraft) -> list[Scenario]:
-    """The three calibration flights of the aircraft."""
+def measured_mass_properties(aircraft: FlownAircraft, seed: int, index: int) -> FlownAircraft:
+    """The nominal model with the aircraft's CG and inertia as a ground measurement gives
+    them: the flown values off by up to MEASUREMENT_ERROR (its own random stream)."""
+    rng = np.random.default_rng([seed, index, 1])
+    return dataclasses.replace(
+        NOMINAL,
+        cg_offset_m=tuple(float(v) for v in np.asarray(aircraft.cg_offset_m) + rng.uniform(
+            -MEASUREMENT_ERROR["cg_offset_m"], MEASUREMENT_ERROR["cg_offset_m"], 3)),
+        inertia_scale=tuple(float(v) for v in np.asarray(aircraft.inertia_scale) * (
+            1.0 + rng.uniform(-MEASUREMENT_ERROR["inertia_scale"],
+                              MEASUREMENT_ERROR["inertia_scale"], 3))))
+
+
+def calibration_scenarios(aircraft: FlownAircraft, index: int) -> list[Scenario]:
+    """The three calibration flights of aircraft number index (0: the model's own)."""
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
     flights = []
     for airspeed_mps, seed, towards_deg, wind_mps in CALIBRATION_FLIGHTS:
-        flight = wind_variant(base, seed, towards_deg, wind_mps)
+        flight = wind_variant(base, seed + SEED_STRIDE * index, towards_deg, wind_mps)
         flights.append(dataclasses.replace(
             flight, aircraft=aircraft,
             initial=dataclasses.replace(flight.initial, airspeed_mps=airspeed_mps)))
@@ -123,21 +142,25 @@ def missed_targets(tests: dict[str, tuple]) -> list[str]:
 
 @dataclasses.dataclass(frozen=True)
 class AircraftTask:
-    """One aircraft of the study: its name, what is flown, the parameters fitted."""
+    """One aircraft of the study: its name and number, what is flown, the parameters
+    fitted, and what the model is given as measured on the ground."""
 
     name: str
+    index: int
     aircraft: FlownAircraft
     parameters: tuple[str, ...]
+    measured: FlownAircraft = NOMINAL
 
 
 def study_aircraft(task: AircraftTask) -> dict:
     """Calibrate, check, fly the test flights and judge them (the module docstring)."""
     started = time.monotonic()
-    flights = [sensor_flight(scenario) for scenario in calibration_scenarios(task.aircraft)]
+    flights = [sensor_flight(scenario)
+               for scenario in calibration_scenarios(task.aircraft, task.index)]
     noise = load_noise_calibration()
     calibration = calibrate(flights, task.parameters,
                             default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                            noise, log=lambda line: None)
+                            noise, log=lambda line: None, measured=task.measured)
     warnings = check_calibration(calibration, flights, noise)
     tests = test_metrics(task.aircraft, calibration.aircraft)
     missed = missed_targets(tests)
@@ -184,15 +207,21 @@ def main() -> int:
     parser.add_argument("--count", type=int, default=40)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
+    parser.add_argument("--measured-mass-properties", action="store_true",
+                        help="give the model each aircraft's CG and inertia as measured on the "
+                             "ground (within MEASUREMENT_ERROR)")
     parser.add_argument("--json", type=Path)
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     parameters = tuple(name.strip() for name in arguments.parameters.split(",") if name.strip())
     for name in parameters:
         model_parameter(name)
-    tasks = [AircraftTask(MODEL, NOMINAL, parameters)] + [
-        AircraftTask(f"#{k}", drawn_aircraft(arguments.seed, k), parameters)
-        for k in range(1, arguments.count + 1)]
+    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters)]
+    for k in range(1, arguments.count + 1):
+        aircraft = drawn_aircraft(arguments.seed, k)
+        measured = (measured_mass_properties(aircraft, arguments.seed, k)
+                    if arguments.measured_mass_properties else NOMINAL)
+        tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured))
     started = time.monotonic()
     with Campaign(campaign_options(arguments)) as campaign:
         rows = campaign.results(study_aircraft, tasks, "aircraft")
@@ -206,6 +235,8 @@ def main() -> int:
     if arguments.json:
         arguments.json.write_text(json.dumps({
             "count": arguments.count, "seed": arguments.seed, "parameters": list(parameters),
+            "measured_mass_properties": (MEASUREMENT_ERROR if arguments.measured_mass_properties
+                                         else None),
             "draw": DRAW, "targets": {"fault_free_below_pct": THRESHOLD_PCT,
                                       "rmse_share": RMSE_SHARE,
                                       "detected_within_s": DETECTED_WITHIN_S,

@@ -3,10 +3,21 @@ themselves are the study's: docs/results.md)."""
 
 from __future__ import annotations
 
-import pytest
-from uav_sim.flown_aircraft import coefficient_names
+import dataclasses
 
-from studies.random_aircraft import DRAW, drawn_aircraft, missed_targets
+import numpy as np
+import pytest
+from uav_sim.flown_aircraft import NOMINAL, coefficient_names
+
+from studies.model_error import CALIBRATION_FLIGHTS
+from studies.random_aircraft import (
+    DRAW,
+    MEASUREMENT_ERROR,
+    calibration_scenarios,
+    drawn_aircraft,
+    measured_mass_properties,
+    missed_targets,
+)
 
 
 @pytest.mark.timeout(30)
@@ -45,3 +56,26 @@ def test_the_targets_are_judged_as_stated():
     assert missed == ["fault-free a 2.00 %", "false alarm a", "false alarm b",
                       "a RMS 3.10 % of 20", "a found 10.5 s", "a final 22.10 % for 20",
                       "b found never"]
+
+
+@pytest.mark.timeout(30)
+def test_no_two_aircraft_share_their_calibration_flights_noise():
+    seeds = {index: [s.seed for s in calibration_scenarios(NOMINAL, index)]
+             for index in range(4)}
+    assert seeds[0] == [seed for _, seed, _, _ in CALIBRATION_FLIGHTS]  # model_error's
+    flat = [seed for flights in seeds.values() for seed in flights]
+    assert len(set(flat)) == len(flat)
+
+
+@pytest.mark.timeout(30)
+def test_mass_properties_are_measured_within_the_stated_error():
+    for k in range(1, 11):
+        flown = drawn_aircraft(1, k)
+        measured = measured_mass_properties(flown, 1, k)
+        assert np.abs(np.subtract(measured.cg_offset_m, flown.cg_offset_m)).max() <= \
+            MEASUREMENT_ERROR["cg_offset_m"]
+        assert np.abs(np.divide(measured.inertia_scale, flown.inertia_scale) - 1.0).max() <= \
+            MEASUREMENT_ERROR["inertia_scale"]
+        assert measured.inertia_scale != flown.inertia_scale  # measured, not copied
+        assert dataclasses.replace(measured, cg_offset_m=NOMINAL.cg_offset_m,
+                                   inertia_scale=NOMINAL.inertia_scale) == NOMINAL

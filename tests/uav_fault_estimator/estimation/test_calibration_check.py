@@ -1,7 +1,8 @@
 """The model calibration's check: an aircraft whose payload sits off the centre line,
 calibrated without the CG among its parameters, is warned of with the channel it rolls and
 the parameter that would take it; calibrated with them, it fits and is not. calibrate_model.py
-prints the warnings, and with --strict writes nothing and exits 1."""
+prints the warnings, and with --strict writes nothing and exits 1; given the CG as measured
+on the ground, it fits."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import sys
 
 import numpy as np
 import pytest
+import yaml
 from helpers.flights import calm
 from helpers.recordings import write_recording
 from helpers.repo import SCRIPTS
@@ -92,3 +94,12 @@ def test_calibrate_model_warns_and_strict_writes_nothing(flight, tmp_path):
     assert lenient.returncode == 0, lenient.stderr
     assert "WARN angular_x keeps a mean" in lenient.stdout
     assert (tmp_path / "model.yaml").exists()
+    # the payload's CG weighed on the ground: the same fit then fits, and the model has it
+    weighed = tmp_path / "weighed.yaml"
+    weighed.write_text(yaml.safe_dump({"aircraft": FLOWN.to_dict()}))
+    measured = subprocess.run([*command, "--measured", str(weighed), "--strict"],
+                              capture_output=True, text=True, timeout=250)
+    assert measured.returncode == 0, measured.stdout + measured.stderr
+    assert "check: the model fits the flights" in measured.stdout
+    model = yaml.safe_load((tmp_path / "model.yaml").read_text())
+    assert model["aircraft"]["cg_offset_m"] == pytest.approx(list(FLOWN.cg_offset_m))

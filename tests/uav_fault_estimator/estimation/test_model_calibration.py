@@ -38,10 +38,12 @@ from uav_fault_estimator.recording.project_bag import (
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
 
-# A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane
+# A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane, and its CG
+# 1.5 cm aft and 1 cm low, as measured on the ground
 TRUTH = {"CDmin": 8.0, "Cmalpha": 6.0, "angle_of_attack_deg": 0.4}
-FLOWN = FlownAircraft(coefficients=(("CDmin", 1.08), ("Cmalpha", 1.06)),
-                      sensor_bias=SensorBias(angle_of_attack_deg=0.4))
+MEASURED = FlownAircraft(cg_offset_m=(-0.015, 0.0, 0.01))
+FLOWN = dataclasses.replace(MEASURED, coefficients=(("CDmin", 1.08), ("Cmalpha", 1.06)),
+                            sensor_bias=SensorBias(angle_of_attack_deg=0.4))
 FLIGHT_S = 120.0  # the first leg and the first turn
 
 
@@ -57,7 +59,7 @@ def flight():
 def calibration(flight):
     return calibrate([flight], tuple(TRUTH),
                      default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                     load_noise_calibration(), log=lambda line: None)
+                     load_noise_calibration(), log=lambda line: None, measured=MEASURED)
 
 
 def test_a_parameter_change_and_its_value_are_one_another():
@@ -96,6 +98,18 @@ def test_the_calibration_finds_how_the_flown_aircraft_differs(calibration):
 
 
 @pytest.mark.timeout(120)
+def test_what_was_measured_on_the_ground_is_kept_and_is_the_prior(calibration):
+    assert calibration.aircraft.cg_offset_m == MEASURED.cg_offset_m
+    assert np.array_equal(calibration.prior_mean, np.zeros(3))  # nothing fitted was measured
+    moved = calibrate([], ("cg_x_cm", "CDmin"),
+                      default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                      load_noise_calibration(), log=lambda line: None, measured=MEASURED)
+    # no flight: the prior alone, about what was measured
+    assert moved.prior_mean == pytest.approx([-1.5, 0.0])
+    assert moved.values == pytest.approx([-1.5, 0.0])
+
+
+@pytest.mark.timeout(120)
 def test_the_calibration_file_gives_the_models_back(calibration, tmp_path):
     noise = tmp_path / "model.noise.yaml"
     noise.write_text("the noise file's existence is what is checked here\n")
@@ -104,6 +118,7 @@ def test_the_calibration_file_gives_the_models_back(calibration, tmp_path):
                                    sort_keys=False))
     loaded = load_model_calibration(path)
     assert loaded.noise_file == noise
+    assert loaded.aircraft.cg_offset_m == pytest.approx(MEASURED.cg_offset_m)
     assert dict(loaded.aircraft.coefficients) == pytest.approx(dict(
         calibration.aircraft.coefficients))
     assert loaded.aircraft.sensor_bias.angle_of_attack_deg == pytest.approx(
@@ -165,6 +180,8 @@ def test_a_recording_with_a_fault_seeded_is_refused(short_flight, tmp_path):
     (["nowhere", "--out", "m.yaml"], "recording nowhere: no such folder"),
     (["nowhere", "--out", "m.yaml", "--parameters", "CDmin,CDwing"],
      "unknown model parameter 'CDwing'"),
+    (["nowhere", "--out", "m.yaml", "--measured", "weighed.yaml"],
+     "measured aircraft weighed.yaml"),
 ])
 def test_calibrate_model_says_what_is_wrong_in_one_line(tmp_path, arguments, words):
     result = subprocess.run([sys.executable, str(SCRIPTS / "calibrate_model.py"), *arguments],

@@ -90,11 +90,12 @@ def check_calibration(calibration: ModelCalibration, flights: Sequence[SensorFli
             f"weighted residual {calibration.reduced_chi_square:.1f} per row (about 1 when "
             f"the model fits, above {MAX_WEIGHTED_RESIDUAL:g} here): the model misses much of "
             "the flights; see the channels below")))
-    for name, value, prior in zip(calibration.names, calibration.values,
-                                  calibration.prior_std, strict=True):
-        if abs(value) > MAX_PRIOR_DEVIATIONS * prior:
+    for name, value, mean, prior in zip(calibration.names, calibration.values,
+                                        calibration.prior_mean, calibration.prior_std,
+                                        strict=True):
+        if abs(value - mean) > MAX_PRIOR_DEVIATIONS * prior:
             found.append(CheckWarning(name, (
-                f"{name} at {value:+.1f} ({abs(value) / prior:.1f} prior deviations): "
+                f"{name} at {value:+.1f} ({abs(value - mean) / prior:.1f} prior deviations): "
                 "pushed there, it likely stands in for a difference not fitted; fit more "
                 "parameters or check the aircraft")))
     found += _structured(calibration, flights, noise)

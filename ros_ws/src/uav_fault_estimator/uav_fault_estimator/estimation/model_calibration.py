@@ -12,9 +12,10 @@ squares on ProxSuite,
 with W the fault-free noise per residual channel (NoiseCalibration, the air-data suite), each
 sample weighted by its AR(1) white equivalent (1 - rho) / (1 + rho) (rho the one-step
 correlation after F_a: samples 0.5 s apart are not independent), and P the prior toward the
-nominal model (ModelParameter.prior_std). After the last step the posterior covariance
-(sum S^T W S + P)^-1 is inflated by the fit's reduced chi-square where it exceeds 1 (what the
-model still misses), and its correlations say which parameters the flights cannot separate.
+nominal model, or the aircraft as measured on the ground (ModelParameter.prior_std). After
+the last step the posterior covariance (sum S^T W S + P)^-1 is inflated by the fit's reduced
+chi-square where it exceeds 1 (what the model still misses), and its correlations say which
+parameters the flights cannot separate.
 No ROS here.
 """
 
@@ -176,7 +177,8 @@ def _column_per_unit(parameter: ModelParameter) -> float:
 @dataclass(frozen=True)
 class ModelCalibration:
     """A calibrated model: the aircraft its copies load, and per parameter (names order) its
-    unit, value, prior deviation and posterior deviation [its unit], the posterior correlations
+    unit, value, prior mean (its measured value, 0 unless measured), prior deviation and
+    posterior deviation [its unit], the posterior correlations
     (n, n), the Gauss-Newton steps taken, the fit's reduced chi-square, and the residuals per
     suite and flight at the calibrated model (for the noise calibration) with their times
     (for the fit's check, calibration_check.py)."""
@@ -185,6 +187,7 @@ class ModelCalibration:
     names: tuple[str, ...]
     units: tuple[str, ...]
     values: np.ndarray
+    prior_mean: np.ndarray
     prior_std: np.ndarray
     posterior_std: np.ndarray
     correlations: np.ndarray
@@ -211,10 +214,12 @@ class CalibrationError(RuntimeError):
 def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
               residual_parameters: Mapping[str, Any], noise: NoiseCalibration,
               map_flights: MapFlights = map, log: Callable[[str], None] = print,
-              ) -> ModelCalibration:
+              measured: FlownAircraft = NOMINAL) -> ModelCalibration:
     """Identify the named parameters from the flights (the module docstring's problem).
     map_flights(function, flights) runs a function on every flight (a process pool's map,
-    or map); log receives one line per step."""
+    or map); log receives one line per step. measured: the aircraft as measured on the
+    ground (its mass properties weighed and swung, say): the fit starts from it, its prior
+    is about it, and every parameter not named keeps its value."""
     parameters = [model_parameter(name) for name in names]
     names = tuple(names)
     prior_inverse = np.diag([1.0 / p.prior_std**2 for p in parameters])
@@ -223,7 +228,7 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
     weights = residual_weights(noise)
     theta = np.zeros(len(names))
     for step in range(1, MAX_STEPS + 1):
-        model = changed(NOMINAL, dict(zip(names, theta, strict=True)))
+        model = changed(measured, dict(zip(names, theta, strict=True)))
         terms = list(map_flights(_TermsAt(model, names, residual_parameters, weights), flights))
         gram = sum(t.gram for t in terms) + prior_inverse
         linear = sum(t.linear for t in terms) - prior_inverse @ theta
@@ -237,7 +242,7 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
             f"move {np.max(np.abs(delta) / deviation):.2f} posterior deviations")
         if np.all(np.abs(delta) <= CONVERGED_SIGMAS * deviation):
             break
-    model = changed(NOMINAL, dict(zip(names, theta, strict=True)))
+    model = changed(measured, dict(zip(names, theta, strict=True)))
     final = list(map_flights(_TermsAt(model, names, residual_parameters, weights), flights))
     rows = sum(t.rows for t in final)
     reduced = sum(t.chi_square for t in final) / max(rows - len(names), 1)
@@ -246,6 +251,7 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
     return ModelCalibration(
         aircraft=model, names=names, units=tuple(p.unit for p in parameters),
         values=np.array(list(values_of(model, names).values())),
+        prior_mean=np.array(list(values_of(measured, names).values())),
         prior_std=np.array([p.prior_std for p in parameters]), posterior_std=deviation,
         correlations=covariance / np.outer(deviation, deviation), steps=step,
         reduced_chi_square=reduced, **_per_suite(map_flights(_NoiseAt(model, residual_parameters),

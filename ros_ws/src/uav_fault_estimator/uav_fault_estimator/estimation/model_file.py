@@ -38,6 +38,19 @@ MODEL_CALIBRATION_FILE = FileKind("model calibration", ModelCalibrationError, 64
                                   "calibrate_model.py writes about 3 kB")
 
 
+MEASURED_AIRCRAFT_FILE = FileKind("measured aircraft", ModelCalibrationError, 64 * 1024,
+                                  "an aircraft block is a few hundred bytes")
+
+
+def load_measured_aircraft(path: str | Path) -> FlownAircraft:
+    """What was measured of the aircraft on the ground (`aircraft:` as a scenario's block,
+    for instance its cg_offset_m from a balance and inertia_scale from a pendulum); a
+    ModelCalibrationError (one line) when it cannot be read or is malformed."""
+    reader = load_yaml(MEASURED_AIRCRAFT_FILE, Path(path))
+    reader.check_keys({"aircraft"})
+    return read_aircraft(reader.child("aircraft"))
+
+
 @dataclass(frozen=True)
 class CalibratedModel:
     """What a model calibration file gives: the aircraft the models load, and the noise
@@ -58,11 +71,11 @@ def calibration_dict(calibration: ModelCalibration, flights: list[str],
     if noise_file:
         entries["noise_calibration_file"] = noise_file
     entries["parameters"] = {
-        name: {"unit": unit, "value": round(float(value), 4), "prior": 0.0,
+        name: {"unit": unit, "value": round(float(value), 4), "prior": round(float(mean), 4),
                "prior_std": float(prior), "posterior_std": round(float(posterior), 4)}
-        for name, unit, value, prior, posterior in zip(
-            calibration.names, calibration.units, calibration.values, calibration.prior_std,
-            calibration.posterior_std, strict=True)}
+        for name, unit, value, mean, prior, posterior in zip(
+            calibration.names, calibration.units, calibration.values, calibration.prior_mean,
+            calibration.prior_std, calibration.posterior_std, strict=True)}
     entries["worst_correlations"] = [
         {"pair": [first, second], "correlation": round(value, 3)}
         for first, second, value in calibration.worst_correlations()]
