@@ -47,7 +47,7 @@ from uav_fault_estimator.campaigns import (
 from uav_fault_estimator.estimation.calibration_check import check_calibration
 from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
 from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
-from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
+from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
 from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
 from uav_fault_estimator.offline import write_calibration
 from uav_fault_estimator.recording.project_bag import (
@@ -74,12 +74,8 @@ def main() -> int:
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
-    names = [name.strip() for name in arguments.parameters.split(",") if name.strip()]
     try:
-        for name in names:
-            model_parameter(name)
-        if len(set(names)) != len(names) or not names:
-            raise ValueError(f"--parameters must name each parameter once, got {names}")
+        names = parameter_list(arguments.parameters)
         measured = load_measured_aircraft(arguments.measured) if arguments.measured else NOMINAL
         typestore = project_typestore()
         flights = [sensor_flight_from_recording(bag, typestore) for bag in arguments.recordings]

@@ -40,9 +40,13 @@ from uav_fault_estimator.campaigns import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.estimation.calibration_check import check_calibration
-from uav_fault_estimator.estimation.model_calibration import calibrate
-from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, model_parameter
-from uav_fault_estimator.estimation.noise_model import load_noise_calibration
+from uav_fault_estimator.estimation.model_calibration import (
+    ModelCalibration,
+    SensorFlight,
+    calibrate,
+)
+from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
+from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
 from uav_fault_estimator.offline import fly_and_estimate, sensor_flight, wind_variant
 from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
@@ -152,15 +156,24 @@ class AircraftTask:
     measured: FlownAircraft = NOMINAL
 
 
+def calibrate_scenarios(scenarios: list[Scenario], parameters: tuple[str, ...],
+                        measured: FlownAircraft = NOMINAL,
+                        ) -> tuple[ModelCalibration, list[SensorFlight], NoiseCalibration]:
+    """The scenarios flown offline and the named parameters calibrated from them, as
+    calibrate_model.py does it; the calibration, the flights and the noise model used."""
+    flights = [sensor_flight(scenario) for scenario in scenarios]
+    noise = load_noise_calibration()
+    calibration = calibrate(flights, parameters,
+                            default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                            noise, log=lambda line: None, measured=measured)
+    return calibration, flights, noise
+
+
 def study_aircraft(task: AircraftTask) -> dict:
     """Calibrate, check, fly the test flights and judge them (the module docstring)."""
     started = time.monotonic()
-    flights = [sensor_flight(scenario)
-               for scenario in calibration_scenarios(task.aircraft, task.index)]
-    noise = load_noise_calibration()
-    calibration = calibrate(flights, task.parameters,
-                            default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                            noise, log=lambda line: None, measured=task.measured)
+    calibration, flights, noise = calibrate_scenarios(
+        calibration_scenarios(task.aircraft, task.index), task.parameters, task.measured)
     warnings = check_calibration(calibration, flights, noise)
     tests = test_metrics(task.aircraft, calibration.aircraft)
     missed = missed_targets(tests)
@@ -201,21 +214,30 @@ def print_row(row: dict) -> None:
         print(f"         WARN {text}")
 
 
+def calibration_study_arguments(parser: argparse.ArgumentParser) -> argparse.Namespace:
+    """A calibration study's command line, parsed: the parser's own arguments, then
+    --parameters (checked, as a tuple), --json FILE and the campaign's options."""
+    parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
+    parser.add_argument("--json", type=Path)
+    add_campaign_arguments(parser)
+    arguments = parser.parse_args()
+    try:
+        arguments.parameters = parameter_list(arguments.parameters)
+    except ValueError as error:
+        parser.error(str(error))
+    return arguments
+
+
 @exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=40)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
     parser.add_argument("--measured-mass-properties", action="store_true",
                         help="give the model each aircraft's CG and inertia as measured on the "
                              "ground (within MEASUREMENT_ERROR)")
-    parser.add_argument("--json", type=Path)
-    add_campaign_arguments(parser)
-    arguments = parser.parse_args()
-    parameters = tuple(name.strip() for name in arguments.parameters.split(",") if name.strip())
-    for name in parameters:
-        model_parameter(name)
+    arguments = calibration_study_arguments(parser)
+    parameters = arguments.parameters
     tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters)]
     for k in range(1, arguments.count + 1):
         aircraft = drawn_aircraft(arguments.seed, k)

@@ -334,9 +334,14 @@ def random_aircraft(data: Mapping[str, Any]) -> list[str]:
     """The totals, then per aircraft the calibration's fit and check, the test flights'
     figures and the targets they miss."""
     totals, targets = data["summary"], data["targets"]
+    measured = data.get("measured_mass_properties")
+    on_the_ground = ("the model given each aircraft's CG and inertia as measured on the "
+                     f"ground (within {', '.join(f'{k} {number(v)}' for k, v in measured.items())})"
+                     if measured else "nothing measured on the ground")
     lines = [f"{data['count']} aircraft drawn with seed {data['seed']} (draw half-widths "
              f"{', '.join(f'{k} {number(v)}' for k, v in data['draw'].items())}) and the "
-             f"model's own; parameters {', '.join(data['parameters'])}. Targets: fault-free "
+             f"model's own; parameters {', '.join(data['parameters'])}; {on_the_ground}. "
+             "Targets: fault-free "
              f"largest below {number(targets['fault_free_below_pct'])} %, RMS at most "
              f"{number(100 * targets['rmse_share'])} % and final within "
              f"{number(100 * targets['final_share'])} % of each magnitude, found within "
@@ -357,6 +362,26 @@ def random_aircraft(data: Mapping[str, Any]) -> list[str]:
           *(number(list(row[key].values())).replace(", ", " / ") for _, key in RUN_FIGURES),
           ", ".join(sorted(set(row["false_alarms"]))) or "none",
           "; ".join(row["missed"]) or "none") for row in data["aircraft"]))
+
+
+# --- the calibration's bias on the model's own aircraft (studies/calibration_bias.py) ----
+
+
+def calibration_bias(data: Mapping[str, Any]) -> list[str]:
+    """Per parameter and condition the mean value over the seed sets, [smallest, largest],
+    and the mean posterior deviation."""
+    conditions = list(data["conditions"])
+    lines = [f"The model's own aircraft calibrated from its three calibration flights, "
+             f"{data['seed_sets']} seed sets per condition; a value is the parameter's "
+             "mean over the seed sets [smallest, largest] ± its mean posterior deviation, "
+             "in the parameter's unit (0 is the model). Wall time "
+             f"{number(data.get('wall_time_s'))} s.", ""]
+    summary = data["summary"]
+    return lines + table(("parameter", *conditions), (
+        (name, *(f"{number(entry['mean'])} [{number(entry['min'])}, {number(entry['max'])}]"
+                 f" ± {number(entry['posterior_std'])}"
+                 for entry in (summary[condition][name] for condition in conditions)))
+        for name in data["parameters"]))
 
 
 # --- demo runs (metrics.json of scripts/demo.sh) ----------------------------------------
@@ -428,6 +453,12 @@ SECTIONS = (
             "Aircraft drawn at random about the model, each calibrated from three fault-free "
             "flights of it and flown through the offline chain with its calibration; the "
             "calibration's own check beside whether the targets are met "
+            "(docs/model_calibration.md)."),
+    Section("Calibration bias", "calibration_bias.json",
+            "python -m studies.calibration_bias --json docs/calibration_bias.json",
+            calibration_bias,
+            "What the model calibration finds on the model's own aircraft, whose every "
+            "parameter is 0, with and without the flights' turbulence and sensor noise "
             "(docs/model_calibration.md)."),
     Section("Airspeed schedule", "airspeed_schedule.json",
             "python -m studies.airspeed_schedule --json docs/airspeed_schedule.json",

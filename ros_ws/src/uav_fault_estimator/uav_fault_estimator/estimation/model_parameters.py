@@ -103,6 +103,17 @@ def model_parameter(name: str) -> ModelParameter:
                           bounds=_SCALE_LIMITS_PCT)
 
 
+def parameter_list(text: str) -> tuple[str, ...]:
+    """The parameters a comma-separated list names ("CDmin, Cmalpha"); ValueError naming
+    what is wrong when it names none, an unknown one or one twice."""
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    for name in names:
+        model_parameter(name)
+    if len(set(names)) != len(names) or not names:
+        raise ValueError(f"the parameters must name each parameter once, got {list(names)}")
+    return names
+
+
 def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircraft:
     """The aircraft with each named parameter moved by its change [its unit]."""
     coefficients = dict(aircraft.coefficients)
