@@ -30,6 +30,7 @@ from uav_sim.flown_aircraft import NOMINAL
 from uav_sim.scenario import Scenario, SensorSuite
 
 from studies.random_aircraft import (
+    EXCITATION,
     calibrate_scenarios,
     calibration_scenarios,
     calibration_study_arguments,
@@ -50,23 +51,25 @@ class BiasTask:
     condition: str
     seed_set: int
     parameters: tuple[str, ...]
+    excite: bool = False
 
 
-def flights_in(condition: str, seed_set: int) -> list[Scenario]:
-    """The model's calibration flights of the seed set, flown in the condition."""
+def flights_in(condition: str, seed_set: int, excite: bool = False) -> list[Scenario]:
+    """The model's calibration flights of the seed set (with random_aircraft.EXCITATION
+    when excite), flown in the condition."""
     turbulence, noise = CONDITIONS[condition]
     return [dataclasses.replace(scenario, wind=dataclasses.replace(scenario.wind,
                                                                     turbulence=turbulence),
                                 sensors=SensorSuite(air_data=True, noise=noise))
-            for scenario in calibration_scenarios(NOMINAL, seed_set)]
+            for scenario in calibration_scenarios(NOMINAL, seed_set, excite)]
 
 
 def calibrate_task(task: BiasTask) -> dict:
     """The task's calibration: per parameter its value and posterior deviation."""
-    calibration, _, _ = calibrate_scenarios(flights_in(task.condition, task.seed_set),
-                                            task.parameters)
+    flights = flights_in(task.condition, task.seed_set, task.excite)
+    calibration, _, _ = calibrate_scenarios(flights, task.parameters)
     return {"condition": task.condition, "seed_set": task.seed_set,
-            "seeds": [s.seed for s in flights_in(task.condition, task.seed_set)],
+            "seeds": [s.seed for s in flights],
             "values": {name: [round(float(v), 3), round(float(s), 3)] for name, v, s in zip(
                 calibration.names, calibration.values, calibration.posterior_std, strict=True)}}
 
@@ -92,9 +95,12 @@ def summary(rows: list[dict], parameters: tuple[str, ...]) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3, help="seed sets per condition")
+    parser.add_argument("--excite", action="store_true",
+                        help="fly random_aircraft.EXCITATION's setpoint changes")
     arguments = calibration_study_arguments(parser)
     parameters = arguments.parameters
-    tasks = [BiasTask(condition, seed_set, parameters) for condition in CONDITIONS
+    tasks = [BiasTask(condition, seed_set, parameters, arguments.excite)
+             for condition in CONDITIONS
              for seed_set in range(arguments.seeds)]
     started = time.monotonic()
     with Campaign(campaign_options(arguments)) as campaign:
@@ -108,6 +114,7 @@ def main() -> int:
     if arguments.json:
         arguments.json.write_text(json.dumps({
             "seed_sets": arguments.seeds, "parameters": list(parameters),
+            "excitation": EXCITATION if arguments.excite else None,
             "conditions": {name: {"turbulence": t, "sensor_noise": n}
                            for name, (t, n) in CONDITIONS.items()},
             "wall_time_s": round(time.monotonic() - started, 1),

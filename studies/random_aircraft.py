@@ -51,7 +51,7 @@ from uav_fault_estimator.offline import fly_and_estimate, sensor_flight, wind_va
 from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
-from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
+from uav_sim.scenario import Scenario, SetpointChange, default_scenario_path, load_scenario
 
 from studies.model_error import CALIBRATION_FLIGHTS
 
@@ -64,6 +64,12 @@ DRAW = {"mass_scale": 0.05, "inertia_scale": 0.10, "cg_offset_m": 0.02, "thrust_
 RMSE_SHARE, DETECTED_WITHIN_S, FINAL_SHARE = 0.15, 10.0, 0.10
 MODEL = "model"
 SEED_STRIDE = 1000  # calibration flight seeds of aircraft k: the model's plus k times this
+# With --excite: each calibration flight's setpoint changes (start [s], airspeed change
+# [m/s], altitude change [m] from the flight's own): a speed step and back, a climb and back,
+# a faster descent and back; throttle swings from near idle to near full (thrust against
+# drag and mass, which level flight at one speed ties together).
+EXCITATION = ((60.0, 4.0, 0.0), (100.0, 0.0, 0.0), (140.0, 0.0, 30.0), (180.0, 0.0, 0.0),
+              (220.0, 4.0, -30.0), (260.0, 0.0, 0.0))
 # With --measured-mass-properties: half-widths of the ground measurement's error, uniform
 # (a CG on a balance within a few millimetres, an inertia from a pendulum within a few %)
 MEASUREMENT_ERROR = {"cg_offset_m": 0.003, "inertia_scale": 0.03}
@@ -101,14 +107,20 @@ def measured_mass_properties(aircraft: FlownAircraft, seed: int, index: int) -> 
                               MEASUREMENT_ERROR["inertia_scale"], 3))))
 
 
-def calibration_scenarios(aircraft: FlownAircraft, index: int) -> list[Scenario]:
-    """The three calibration flights of aircraft number index (0: the model's own)."""
+def calibration_scenarios(aircraft: FlownAircraft, index: int,
+                          excite: bool = False) -> list[Scenario]:
+    """The three calibration flights of aircraft number index (0: the model's own), with
+    the EXCITATION setpoint changes when excite."""
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
     flights = []
     for airspeed_mps, seed, towards_deg, wind_mps in CALIBRATION_FLIGHTS:
         flight = wind_variant(base, seed + SEED_STRIDE * index, towards_deg, wind_mps)
+        altitude_m = flight.initial.altitude_m
+        setpoints = tuple(SetpointChange(start_s, airspeed_mps + speed_mps,
+                                         altitude_m + climb_m)
+                          for start_s, speed_mps, climb_m in EXCITATION) if excite else ()
         flights.append(dataclasses.replace(
-            flight, aircraft=aircraft,
+            flight, aircraft=aircraft, setpoints=setpoints,
             initial=dataclasses.replace(flight.initial, airspeed_mps=airspeed_mps)))
     return flights
 
@@ -154,6 +166,7 @@ class AircraftTask:
     aircraft: FlownAircraft
     parameters: tuple[str, ...]
     measured: FlownAircraft = NOMINAL
+    excite: bool = False
 
 
 def calibrate_scenarios(scenarios: list[Scenario], parameters: tuple[str, ...],
@@ -173,7 +186,8 @@ def study_aircraft(task: AircraftTask) -> dict:
     """Calibrate, check, fly the test flights and judge them (the module docstring)."""
     started = time.monotonic()
     calibration, flights, noise = calibrate_scenarios(
-        calibration_scenarios(task.aircraft, task.index), task.parameters, task.measured)
+        calibration_scenarios(task.aircraft, task.index, task.excite), task.parameters,
+        task.measured)
     warnings = check_calibration(calibration, flights, noise)
     tests = test_metrics(task.aircraft, calibration.aircraft)
     missed = missed_targets(tests)
@@ -236,14 +250,16 @@ def main() -> int:
     parser.add_argument("--measured-mass-properties", action="store_true",
                         help="give the model each aircraft's CG and inertia as measured on the "
                              "ground (within MEASUREMENT_ERROR)")
+    parser.add_argument("--excite", action="store_true",
+                        help="fly EXCITATION's setpoint changes in the calibration flights")
     arguments = calibration_study_arguments(parser)
-    parameters = arguments.parameters
-    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters)]
+    parameters, excite = arguments.parameters, arguments.excite
+    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite)]
     for k in range(1, arguments.count + 1):
         aircraft = drawn_aircraft(arguments.seed, k)
         measured = (measured_mass_properties(aircraft, arguments.seed, k)
                     if arguments.measured_mass_properties else NOMINAL)
-        tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured))
+        tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured, excite))
     started = time.monotonic()
     with Campaign(campaign_options(arguments)) as campaign:
         rows = campaign.results(study_aircraft, tasks, "aircraft")
@@ -259,6 +275,7 @@ def main() -> int:
             "count": arguments.count, "seed": arguments.seed, "parameters": list(parameters),
             "measured_mass_properties": (MEASUREMENT_ERROR if arguments.measured_mass_properties
                                          else None),
+            "excitation": EXCITATION if excite else None,
             "draw": DRAW, "targets": {"fault_free_below_pct": THRESHOLD_PCT,
                                       "rmse_share": RMSE_SHARE,
                                       "detected_within_s": DETECTED_WITHIN_S,

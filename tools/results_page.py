@@ -371,7 +371,13 @@ def calibration_bias(data: Mapping[str, Any]) -> list[str]:
     """Per parameter and condition the mean value over the seed sets, [smallest, largest],
     and the mean posterior deviation."""
     conditions = list(data["conditions"])
-    lines = [f"The model's own aircraft calibrated from its three calibration flights, "
+    excitation = data.get("excitation")
+    flown = ("with these setpoint changes (start [s], airspeed and altitude change [m/s, m]): "
+             + "; ".join(f"{number(t)}: {number(v)}, {number(h)}" for t, v, h in excitation)
+             if excitation else "level, at one airspeed each")
+    lines = [f"#### Calibration flights {'excited' if excitation else 'level'}", "",
+             f"The calibration flights flown {flown}. "
+             f"The model's own aircraft calibrated from its three calibration flights, "
              f"{data['seed_sets']} seed sets per condition; a value is the parameter's "
              "mean over the seed sets [smallest, largest] ± its mean posterior deviation, "
              "in the parameter's unit (0 is the model). Wall time "
@@ -454,8 +460,10 @@ SECTIONS = (
             "flights of it and flown through the offline chain with its calibration; the "
             "calibration's own check beside whether the targets are met "
             "(docs/model_calibration.md)."),
-    Section("Calibration bias", "calibration_bias.json",
-            "python -m studies.calibration_bias --json docs/calibration_bias.json",
+    Section("Calibration bias", "calibration_bias*.json",
+            "python -m studies.calibration_bias --json docs/calibration_bias.json && "
+            "python -m studies.calibration_bias --excite --json "
+            "docs/calibration_bias_excited.json",
             calibration_bias,
             "What the model calibration finds on the model's own aircraft, whose every "
             "parameter is 0, with and without the flights' turbulence and sensor noise "

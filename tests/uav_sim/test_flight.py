@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 from helpers.flights import calm, column, fly
-from uav_common.channels import STATE_CHANNELS
-from uav_sim.scenario import SensorDropout
+from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_sim.scenario import SensorDropout, SetpointChange
 from uav_sim.simulation import Simulation
 
 ALTITUDE = STATE_CHANNELS.index("altitude")
@@ -119,6 +119,24 @@ def test_sensor_dropout_is_nan_for_its_duration(default_scenario):
     assert np.isfinite(
         np.delete(column(samples, "state"), STATE_CHANNELS.index("pitch_rate"), 1)
     ).all()
+
+
+@pytest.mark.timeout(300)
+def test_the_autopilot_flies_the_setpoint_changes(default_scenario):
+    """A speed step and a climb: 30 s after each the aircraft is within 1 m/s and 5 m of it
+    (measured: 0.3 m/s and 2 m), and the throttle has swung well off its trim."""
+    changes = (SetpointChange(10.0, airspeed_mps=28.0), SetpointChange(50.0, altitude_m=280.0))
+    scenario = dataclasses.replace(default_scenario, duration_s=80.0, faults=(),
+                                   setpoints=changes)
+    samples = fly(scenario)
+    time_s = column(samples, "time_s")
+    airspeed = column(samples, "true_air_data", 0)
+    altitude = column(samples, "true_state", STATE_CHANNELS.index("altitude"))
+    throttle = column(samples, "true_controls", CONTROL_CHANNELS.index("throttle"))
+    assert abs(airspeed[np.isclose(time_s, 40.0)][0] - 28.0) < 1.0
+    assert abs(altitude[np.isclose(time_s, 80.0)][0] - 280.0) < 5.0
+    assert abs(airspeed[np.isclose(time_s, 9.0)][0] - 25.0) < 1.0
+    assert throttle.max() - throttle.min() > 0.4
 
 
 def test_sensor_rate_must_divide_the_simulation_rate(default_scenario):

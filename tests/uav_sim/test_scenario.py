@@ -95,6 +95,13 @@ def test_default_scenario_values(default_data):
             [{"channel": "roll", "start_s": 2, "end_s": 1}],
             "'sensor_dropouts[0].end_s' must be after start_s",
         ),
+        ("setpoints", [{"start_s": 60}], "'setpoints[0].start_s': a setpoint change needs"),
+        ("setpoints", [{"start_s": 60, "airspeed_mps": 0}],
+         "'setpoints[0].airspeed_mps' must be"),
+        ("setpoints", [{"start_s": -1, "altitude_m": 300}],
+         "'setpoints[0].start_s' must be at least 0"),
+        ("setpoints", [{"start_s": 60, "heading_deg": 90}],
+         "unknown key 'setpoints[0].heading_deg'"),
     ],
 )
 def test_bad_scenarios_name_the_file_and_the_key(tmp_path, default_data, key, value, message):
@@ -229,3 +236,15 @@ def test_deeply_nested_yaml_is_one_line(tmp_path):
     with pytest.raises(ScenarioError) as error:
         load_scenario(path)
     assert str(error.value) == f"scenario {path}: not valid YAML (nested too deeply)"
+
+
+def test_setpoint_changes_hold_from_their_start_in_time_order(tmp_path, default_data):
+    default_data["setpoints"] = [{"start_s": 100, "altitude_m": 280},
+                                 {"start_s": 60, "airspeed_mps": 28},
+                                 {"start_s": 140, "airspeed_mps": 22, "altitude_m": 250}]
+    scenario = load_scenario(write(tmp_path, default_data))
+    first = (scenario.initial.airspeed_mps, scenario.initial.altitude_m)
+    assert scenario.commanded(59.9) == first
+    assert scenario.commanded(60.0) == (28.0, first[1])
+    assert scenario.commanded(120.0) == (28.0, 280.0)
+    assert scenario.commanded(1000.0) == (22.0, 250.0)

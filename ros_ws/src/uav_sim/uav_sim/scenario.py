@@ -124,6 +124,17 @@ class SensorDropout:
 
 
 @dataclass(frozen=True)
+class SetpointChange:
+    """From start_s on, the autopilot holds this airspeed [m/s] and altitude [m] (None:
+    the one it held before): speed steps, climbs and descents, which separate in a model
+    calibration what steady level flight ties together (thrust against drag and mass)."""
+
+    start_s: float
+    airspeed_mps: float | None = None
+    altitude_m: float | None = None
+
+
+@dataclass(frozen=True)
 class Scenario:
     name: str
     duration_s: float
@@ -136,6 +147,7 @@ class Scenario:
     aircraft: FlownAircraft = NOMINAL
     faults: tuple[SeededFault, ...] = ()
     sensor_dropouts: tuple[SensorDropout, ...] = ()
+    setpoints: tuple[SetpointChange, ...] = ()
     estimator: dict[str, Any] = field(default_factory=dict)
     path: Path | None = None
 
@@ -148,6 +160,19 @@ class Scenario:
 
     def dropped_channels(self, time_s: float) -> set[str]:
         return {dropout.channel for dropout in self.sensor_dropouts if dropout.active(time_s)}
+
+    def commanded(self, time_s: float) -> tuple[float, float]:
+        """The autopilot's airspeed [m/s] and altitude [m] at time_s: the initial ones,
+        changed by each setpoint change begun by then, in time order."""
+        airspeed_mps, altitude_m = self.initial.airspeed_mps, self.initial.altitude_m
+        for change in sorted(self.setpoints, key=lambda c: c.start_s):
+            if change.start_s > time_s:
+                break
+            if change.airspeed_mps is not None:
+                airspeed_mps = change.airspeed_mps
+            if change.altitude_m is not None:
+                altitude_m = change.altitude_m
+        return airspeed_mps, altitude_m
 
 
 def default_scenario_path() -> Path:
@@ -296,6 +321,20 @@ def _dropout(reader: Reader) -> SensorDropout:
     return dropout
 
 
+def _setpoint(reader: Reader) -> SetpointChange:
+    reader.check_keys({"start_s"}, {"airspeed_mps", "altitude_m"})
+    if not {"airspeed_mps", "altitude_m"} & set(reader.data):
+        reader.fail(f"'{reader.key('start_s')}': a setpoint change needs airspeed_mps, "
+                    "altitude_m or both")
+    return SetpointChange(
+        start_s=reader.number("start_s", minimum=0.0),
+        airspeed_mps=(reader.number("airspeed_mps", positive=True)
+                      if "airspeed_mps" in reader.data else None),
+        altitude_m=(reader.number("altitude_m", positive=True)
+                    if "altitude_m" in reader.data else None),
+    )
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and check a scenario file; raises ScenarioError with one clear message."""
     path = Path(path)
@@ -303,7 +342,8 @@ def load_scenario(path: str | Path) -> Scenario:
     data = reader.data
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
-        {"sensors", "guidance", "aircraft", "faults", "sensor_dropouts", "estimator"},
+        {"sensors", "guidance", "aircraft", "faults", "sensor_dropouts", "setpoints",
+         "estimator"},
     )
     if reader.text("name") in (".", "..") or any(c in data["name"] for c in "/\\\0"):
         # demo.sh's default output folder is runs/<name>/
@@ -339,6 +379,8 @@ def load_scenario(path: str | Path) -> Scenario:
             for index in range(len(reader.items("faults")))
         ),
         sensor_dropouts=dropouts,
+        setpoints=tuple(_setpoint(reader.element("setpoints", index))
+                        for index in range(len(reader.items("setpoints")))),
         estimator=dict(estimator),
         path=path,
     )

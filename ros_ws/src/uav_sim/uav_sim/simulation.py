@@ -213,6 +213,8 @@ class Simulation:
             np.array([fdm["velocities/v-north-fps"], fdm["velocities/v-east-fps"]]) * M_PER_FT,
             dt_s,
         )
+        self.autopilot.airspeed_cmd_mps, self.autopilot.altitude_cmd_m = (
+            self.scenario.commanded(self.time_s))
         commands = self.autopilot.update(state, roll_cmd_rad, dt_s)
         self._setpoints = np.array([commands.roll_cmd_rad, commands.pitch_cmd_rad, math.nan])
         fdm["fcs/elevator-cmd-norm"] = commands.elevator_rad / SURFACE_LIMIT_RAD
