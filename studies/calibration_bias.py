@@ -95,8 +95,6 @@ def summary(rows: list[dict], parameters: tuple[str, ...]) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3, help="seed sets per condition")
-    parser.add_argument("--excite", action="store_true",
-                        help="fly random_aircraft.EXCITATION's setpoint changes")
     arguments = calibration_study_arguments(parser)
     parameters = arguments.parameters
     tasks = [BiasTask(condition, seed_set, parameters, arguments.excite)

@@ -230,8 +230,10 @@ def print_row(row: dict) -> None:
 
 def calibration_study_arguments(parser: argparse.ArgumentParser) -> argparse.Namespace:
     """A calibration study's command line, parsed: the parser's own arguments, then
-    --parameters (checked, as a tuple), --json FILE and the campaign's options."""
+    --parameters (checked, as a tuple), --excite, --json FILE and the campaign's options."""
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
+    parser.add_argument("--excite", action="store_true",
+                        help="fly EXCITATION's setpoint changes in the calibration flights")
     parser.add_argument("--json", type=Path)
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
@@ -250,8 +252,6 @@ def main() -> int:
     parser.add_argument("--measured-mass-properties", action="store_true",
                         help="give the model each aircraft's CG and inertia as measured on the "
                              "ground (within MEASUREMENT_ERROR)")
-    parser.add_argument("--excite", action="store_true",
-                        help="fly EXCITATION's setpoint changes in the calibration flights")
     arguments = calibration_study_arguments(parser)
     parameters, excite = arguments.parameters, arguments.excite
     tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite)]

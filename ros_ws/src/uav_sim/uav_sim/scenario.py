@@ -151,6 +151,11 @@ class Scenario:
     estimator: dict[str, Any] = field(default_factory=dict)
     path: Path | None = None
 
+    def __post_init__(self) -> None:
+        # in start order once, not at each of commanded()'s 120 Hz calls
+        object.__setattr__(self, "setpoints",
+                           tuple(sorted(self.setpoints, key=lambda change: change.start_s)))
+
     def faults_pct(self, time_s: float) -> dict[str, float]:
         """Seeded value [%] of every fault name at time_s (several entries of a name add)."""
         values = dict.fromkeys(FAULT_NAMES, 0.0)
@@ -165,7 +170,7 @@ class Scenario:
         """The autopilot's airspeed [m/s] and altitude [m] at time_s: the initial ones,
         changed by each setpoint change begun by then, in time order."""
         airspeed_mps, altitude_m = self.initial.airspeed_mps, self.initial.altitude_m
-        for change in sorted(self.setpoints, key=lambda c: c.start_s):
+        for change in self.setpoints:
             if change.start_s > time_s:
                 break
             if change.airspeed_mps is not None:
