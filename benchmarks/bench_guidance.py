@@ -34,8 +34,8 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_fault_estimator.offline import fly_and_estimate
-from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_sim.guidance import route_errors
 from uav_sim.mpc_guidance import MpcGuidance
 from uav_sim.paths import scenarios_dir

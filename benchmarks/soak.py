@@ -35,7 +35,7 @@ from uav_common.channels import CONTROL_CHANNELS, PAPER_FAULT_NAMES, STATE_CHANN
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
 from uav_common.ros.messages import header
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import RosProcess, reserve_domain_id, ros2_run_argv, stop_all
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_fault_msgs.msg import FaultEstimate, Residuals

@@ -6,7 +6,7 @@
         [--generators NAMES] [--schedule auto|none] [--false-alarm-probability 0.01]
         [--forgetting-factor F] [--window M] [--settle-s S]
 
-ALFA_FOLDER holds flight folders in ALFA's processed layout (../shared/alfa/flights). Each
+ALFA_FOLDER holds flight folders in ALFA's processed layout (docs/flight_logs.md). Each
 labelled flight is read with the airframe (default the shipped carbon_z_alfa.yaml), its
 truth from its failure_status files; an unlabelled one (no_ground_truth) is left out, said.
 Without --calibrate-on: leave one flight out (each flight screened with a calibration from
@@ -23,8 +23,8 @@ channel reads the throttle output an engine failure cuts, so it would count the 
 the log has no airspeed) when the calibration flights span enough of it; the default is none
 (measured: the same flights found, three engine failures first on roll_tracking instead of
 climb_tracking, delays 0.6 s shorter on average). The peer, Keipour et al.'s RLS detector
-(benchmarks/keipour2019_rls.py), runs on the same flights in the same folds unless
---no-peer.
+(uav_fault_estimator.flight_logs.keipour2019_rls), runs on the same flights in the same
+folds unless --no-peer.
 
 Prints, for the project's detector and then the peer, a line per flight, the table per
 failure kind and the summary, counted as ALFA's evaluator counts (a first alarm later than
@@ -85,7 +85,7 @@ from uav_fault_estimator.flight_logs.screening import alarm_intervals, plot_scre
 # The peer (benchmarks/, a reference kept out of the installed packages) is imported from
 # the clone this script belongs to.
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from benchmarks import keipour2019_rls as peer
+from uav_fault_estimator.flight_logs import keipour2019_rls as peer
 
 PROGRAM = "alfa_benchmark.py"
 ALFA_GENERATORS = ("roll_tracking", "pitch_tracking", "climb_tracking", "lateral_force")

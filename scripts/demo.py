@@ -48,7 +48,6 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from report import write_report
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
 from uav_common.ros_processes import (
@@ -61,6 +60,7 @@ from uav_common.ros_processes import (
     stop_all,
 )
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
+from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
@@ -129,7 +129,7 @@ class Progress:
         from diagnostic_msgs.msg import DiagnosticArray
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
-        from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+        from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
         from uav_fault_msgs.msg import FaultEstimate
 
         self._rclpy = rclpy

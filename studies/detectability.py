@@ -36,10 +36,11 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD
 from uav_fault_estimator.offline import fly_and_estimate, wind_variant
-from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
-from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
+from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import Scenario, SensorSuite, default_scenario_path, load_scenario
 
 TURBULENCES = ("none", "from_wind", "light", "moderate")

@@ -40,6 +40,8 @@ from uav_fault_estimator.campaigns import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.estimation.calibration_check import check_calibration
+from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.model_calibration import (
     ModelCalibration,
     SensorFlight,
@@ -48,8 +50,7 @@ from uav_fault_estimator.estimation.model_calibration import (
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
 from uav_fault_estimator.offline import fly_and_estimate, sensor_flight, wind_variant
-from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
-from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
+from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_sim.scenario import Scenario, SetpointChange, default_scenario_path, load_scenario
 

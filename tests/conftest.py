@@ -13,11 +13,13 @@ import cloudpickle
 import helpers
 import pytest
 import yaml
+from helpers.flights import fly
 from helpers.ros_graph import RosGraph
 from helpers.started_processes import started_processes
 from uav_common.ros_processes import reserve_domain_id
 from uav_fault_estimator.campaigns import Campaign, CampaignOptions
-from uav_sim.scenario import default_scenario_path
+from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
+from uav_sim.simulation import Sample
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -53,6 +55,18 @@ def ros_domain(ros_logs: None, domain_locks: list[IO[str]]) -> int:
     domain_locks[:] = [lock]
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
     return domain_id
+
+
+@pytest.fixture(scope="session")
+def default_scenario() -> Scenario:
+    """The shipped default scenario."""
+    return load_scenario(default_scenario_path())
+
+
+@pytest.fixture(scope="session")
+def default_flight(default_scenario) -> list[Sample]:
+    """The default scenario's samples, flown once per test process."""
+    return fly(default_scenario)
 
 
 @pytest.fixture(scope="session")

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from rclpy.duration import Duration
 from uav_common.ros.messages import air_data_message, controls_message, state_message, wind_message
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.qos import STREAM_QOS
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, WindEstimate
 from uav_sim.scenario import Scenario
 from uav_sim.simulation import Simulation

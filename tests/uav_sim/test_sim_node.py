@@ -11,7 +11,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Vector3Stamped
 from rosgraph_msgs.msg import Clock
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
 

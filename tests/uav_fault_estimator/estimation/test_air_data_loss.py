@@ -12,11 +12,12 @@ import numpy as np
 import pytest
 from uav_common.channels import AIR_DATA_CHANNELS
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
 from uav_fault_estimator.offline import fly_and_estimate
-from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
-from uav_fault_estimator.reporting.metrics import SETTLE_S, fault_metrics
+from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import SensorDropout, default_scenario_path, load_scenario
 
@@ -46,18 +47,22 @@ def test_the_estimates_stay_within_the_targets_through_a_30_s_air_data_loss():
 @pytest.mark.timeout(30)
 def test_the_estimate_is_held_from_the_loss_until_f_a_has_forgotten_it():
     calibration = load_noise_calibration()
-    noise = SuiteNoise(calibration, tau_a_s=4.0, variance_factor=2.0)
+    noise = SuiteNoise(calibration, variance_factor=2.0)
+    tau_a_s = 4.0  # the residuals' F_a: held for 3 tau_a = 12 s after the air data is back
     air, filtered = (calibration.q_diag(source, 2.0) for source in (WIND_AIR_DATA,
                                                                      WIND_FILTERED))
     # no air data yet (an aircraft without it, or before its first sample): filtered Q
-    assert np.array_equal(noise.weigh(5.0, WIND_FILTERED), filtered)
-    assert np.array_equal(noise.weigh(10.0, WIND_AIR_DATA), air)
-    assert noise.weigh(20.0, WIND_FILTERED) is None            # lost after being flown
-    assert noise.hold_after_s == 12.0                          # 3 tau_a
-    assert noise.weigh(31.5, WIND_AIR_DATA) is None            # back, F_a still settling
-    assert np.array_equal(noise.weigh(32.0, WIND_AIR_DATA), air)
+    assert np.array_equal(noise.weigh(5.0, WIND_FILTERED, tau_a_s), filtered)
+    assert np.array_equal(noise.weigh(10.0, WIND_AIR_DATA, tau_a_s), air)
+    assert noise.weigh(20.0, WIND_FILTERED, tau_a_s) is None      # lost after being flown
+    assert noise.weigh(31.5, WIND_AIR_DATA, tau_a_s) is None      # back, F_a still settling
+    assert np.array_equal(noise.weigh(32.0, WIND_AIR_DATA, tau_a_s), air)
+    # a residual filter twice as slow holds twice as long
+    assert noise.weigh(35.0, WIND_FILTERED, tau_a_s) is None
+    assert noise.weigh(50.0, WIND_AIR_DATA, 2 * tau_a_s) is None
+    assert np.array_equal(noise.weigh(59.0, WIND_AIR_DATA, 2 * tau_a_s), air)
     noise.reset()
-    assert np.array_equal(noise.weigh(33.0, WIND_FILTERED), filtered)
+    assert np.array_equal(noise.weigh(60.0, WIND_FILTERED, tau_a_s), filtered)
 
 
 @pytest.mark.slow

@@ -13,7 +13,7 @@ from helpers.repo import SCRIPTS
 from nav_msgs.msg import Odometry
 from tf2_msgs.msg import TFMessage
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import wait_until
 from uav_fault_msgs.msg import FaultEstimate
 

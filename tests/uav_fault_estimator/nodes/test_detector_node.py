@@ -11,7 +11,7 @@ import pytest
 import yaml
 from helpers.alarms import assert_alarms_are_the_cores
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate

@@ -25,7 +25,7 @@ from helpers.ros2_cli import param_get, param_set
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.serialization import deserialize_message
 from uav_common.package_data import default_parameters
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_estimator.live_view import (
     SUBPROTOCOL,

@@ -12,7 +12,7 @@ from helpers.ros2_cli import param_get, param_set
 from rosgraph_msgs.msg import Clock
 from scipy.optimize import linprog
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import STREAM_QOS
+from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import SelfTuningDetector

@@ -14,7 +14,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.messages import BODY_FRAME, header
-from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
 from uav_fault_msgs.msg import FaultEstimate, Residuals
@@ -23,6 +23,7 @@ pytestmark = pytest.mark.integration
 
 DURATION_S = 40.0
 PERIOD_S = 0.5
+TAU_A_S = 4.0  # the residuals' F_a, as residual_node's default sends it [s]
 CALM = {"north_mps": 0.0, "east_mps": 0.0, "down_mps": 0.0, "turbulence": "none",
         "filter_time_constant_s": 10}
 LIFT_LOSS = {"name": "right_wing_lift_loss", "start_s": 0, "ramp_s": 0, "magnitude_pct": 10}
@@ -134,6 +135,7 @@ class SyntheticResiduals:
         return Residuals(header=header(k * PERIOD_S, BODY_FRAME), residual=residual.tolist(),
                          valid=[True] * Residuals.CHANNELS,
                          wind_source=Residuals.WIND_AIR_DATA,
+                         filter_time_constant_s=TAU_A_S,
                          fault_names=list(PAPER_FAULT_NAMES),
                          sensitivity=self.sensitivity.ravel().tolist())
 
@@ -182,8 +184,8 @@ def test_hostile_residuals_are_one_dropped_message_each_and_the_estimates_go_on(
 @pytest.mark.timeout(120)
 def test_an_air_data_loss_holds_the_estimate_until_f_a_has_settled(graph, start_process):
     """Residuals that flew the filtered wind after the air data (a loss of 5 s) and the
-    air-data ones for 12 s (3 tau_a) after it: HELD, with the estimate before the loss,
-    counted on /diagnostics; then estimated again."""
+    air-data ones for 3 tau_a after it (tau_a the residuals' own filter_time_constant_s):
+    HELD, with the estimate before the loss, counted on /diagnostics; then estimated again."""
     synthetic = SyntheticResiduals(graph, seed=5)
     estimates = synthetic.estimates
     node = synthetic.start_mhe_node(start_process, "mhe_node")
@@ -199,8 +201,8 @@ def test_an_air_data_loss_holds_the_estimate_until_f_a_has_settled(graph, start_
     statuses = [m.solver_status for m in estimates]
     held = [k for k, status in enumerate(statuses, start=1)
             if status == FaultEstimate.STATUS_HELD]
-    assert held == [k for k in range(lost.start, count + 1)  # held less than 12 s after
-                    if (k - lost[-1]) * PERIOD_S < 12.0]
+    assert held == [k for k in range(lost.start, count + 1)  # held less than 3 tau_a after
+                    if (k - lost[-1]) * PERIOD_S < 3 * TAU_A_S]
     assert all(estimates[k - 1].values_pct == estimates[39].values_pct for k in held)
     assert statuses[-1] == FaultEstimate.STATUS_SOLVED
     assert estimates[-1].values_pct[0] == pytest.approx(5.0, abs=1.0)

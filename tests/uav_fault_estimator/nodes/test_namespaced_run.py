@@ -12,7 +12,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import recorded_count
 from helpers.repo import SCRIPTS
-from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
 from uav_fault_msgs.msg import FaultEstimate
 

@@ -15,13 +15,13 @@ from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from uav_common.package_data import default_parameters
-from uav_common.ros.node_tools import (
+from uav_common.ros.parameter_files import wildcard_only_names
+from uav_common.ros.parameters import (
     ParameterError,
     ParameterSpec,
     checked_value,
     declare_parameters,
 )
-from uav_common.ros.parameter_files import wildcard_only_names
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_estimator.nodes import (
     detector_node,

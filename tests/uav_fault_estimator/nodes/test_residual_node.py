@@ -11,7 +11,7 @@ import yaml
 from diagnostic_msgs.msg import DiagnosticArray
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_seconds
-from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS
+from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
 from uav_fault_msgs.msg import Residuals
 

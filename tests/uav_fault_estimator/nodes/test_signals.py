@@ -16,7 +16,8 @@ import sys
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import recorded_count
-from uav_common.ros.node_tools import DIAGNOSTICS_QOS, STREAM_QOS, STUCK_STOP_S
+from uav_common.ros.node_life import STUCK_STOP_S
+from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv, stop_all, wait_until
 from uav_fault_msgs.msg import AircraftState
 
@@ -115,7 +116,7 @@ def test_the_whole_graph_started_in_the_background_ends_cleanly(start_process, g
 HANGING_NODE = """
 import time
 from rclpy.node import Node
-from uav_common.ros.node_tools import Stopped, run_node
+from uav_common.ros.node_life import Stopped, run_node
 
 def run(node):
     print("running", flush=True)

@@ -23,14 +23,9 @@ from uav_sim.simulation import Simulation
 
 from uav_fault_estimator.campaigns import Campaign
 from uav_fault_estimator.detection.detector import DetectorFlight
-from uav_fault_estimator.estimation.estimator_config import (
-    config_from_parameters,
-    suite_noise,
-)
-from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
+from uav_fault_estimator.estimation.estimator_step import EstimatorStep, ResidualInput
 from uav_fault_estimator.estimation.model_calibration import SensorFlight
-from uav_fault_estimator.estimation.prediction import residual_generator
-from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
+from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
 
 PACKAGE = "uav_fault_estimator"
@@ -59,36 +54,33 @@ def fly_and_estimate(
                 **(residual_overrides or {})}
     mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), **scenario.estimator,
            **(mhe_overrides or {})}
-    generator = residual_generator(residual, model)
-    estimator = MovingHorizonEstimator(config_from_parameters(mhe, len(RESIDUAL_CHANNELS)))
-    noise = suite_noise(mhe, residual["tau_a_s"])
-    published = list(mhe["fault_names"])
+    sampler = residual_sampler(residual, model)
+    step = EstimatorStep(mhe)
     simulation = Simulation(scenario)
-    period_s = float(residual["update_period_s"])
     stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
     sample = simulation.sample()
     while True:
         wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
-        result = generator.update(sample.time_s, sample.state, sample.controls, wind,
-                                  None if true_wind else sample.air_data)
-        if result is not None and on_grid(sample.time_s, period_s):
-            q_diag = noise.weigh(sample.time_s, result.wind_source)
-            estimate = (estimator.hold() if q_diag is None else estimator.update(
-                result.residual, result.sensitivity, result.valid, q_diag))
+        result = sampler.update(sample.time_s, sample.state, sample.controls, wind,
+                                None if true_wind else sample.air_data)
+        if result is not None:
+            estimate = step.update(ResidualInput(
+                sample.time_s, result.residual, result.valid, result.sensitivity,
+                sampler.generator.column_names, result.wind_source, sampler.generator.tau_a_s))
             stamps.append(sample.time_s)
-            values.append(estimate.fault_pct[estimate.columns(published)])
-            statuses.append(int(estimate.status))
-            times_ms.append(estimate.update_time_ms)
-            cpu_ms.append(estimate.update_cpu_ms)
+            values.append(estimate.published_pct)
+            statuses.append(int(estimate.estimate.status))
+            times_ms.append(estimate.estimate.update_time_ms)
+            cpu_ms.append(estimate.estimate.update_cpu_ms)
             seeded.append(sample.seeded_faults_pct)
         if simulation.finished:
             break
         sample = simulation.step()
     stamps_s = np.array(stamps)
     return (
-        EstimateSeries(list(mhe["fault_names"]), stamps_s, np.array(values),
+        EstimateSeries(step.published_names, stamps_s, np.array(values),
                        np.array(statuses), np.array(times_ms), np.array(cpu_ms),
-                       estimator.config.solver.method),
+                       step.config.solver.method),
         SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
     )
 
@@ -162,15 +154,14 @@ def fault_free_residuals(scenario: Scenario) -> np.ndarray:
     """The residuals (K, 6) residual_node would publish for the scenario with its default
     parameters, on the update grid, where every row is valid. (y does not depend on S:
     the sensitivities' model copies are left out.)"""
-    parameters = default_parameters(PACKAGE, "residual_node.yaml")
-    generator = residual_generator({**parameters, "fault_names": []})
-    period_s = float(parameters["update_period_s"])
+    sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
+                                "fault_names": []})
     simulation = Simulation(scenario)
     sample, rows = simulation.sample(), []
     while True:
-        result = generator.update(sample.time_s, sample.state, sample.controls,
-                                  sample.wind_filtered_ned_mps, sample.air_data)
-        if result is not None and on_grid(sample.time_s, period_s) and result.valid.all():
+        result = sampler.update(sample.time_s, sample.state, sample.controls,
+                                sample.wind_filtered_ned_mps, sample.air_data)
+        if result is not None and result.valid.all():
             rows.append(result.residual)
         if simulation.finished:
             return np.array(rows)

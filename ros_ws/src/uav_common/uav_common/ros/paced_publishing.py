@@ -13,7 +13,7 @@ from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import ReliabilityPolicy
 
-from uav_common.ros.node_tools import ParameterError
+from uav_common.ros.parameters import ParameterError
 
 ACK_TIMEOUT_S = 10.0
 ACK_POLL_S = 0.1  # wall time per wait for acknowledgements, between checks for SIGINT

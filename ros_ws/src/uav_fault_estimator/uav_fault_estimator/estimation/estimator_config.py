@@ -14,7 +14,6 @@ from uav_fault_estimator.estimation.fault_models import FaultModel, make_model
 from uav_fault_estimator.estimation.monotone_active_set import is_monotone
 from uav_fault_estimator.estimation.noise_model import (
     NoiseCalibration,
-    SuiteNoise,
     load_noise_calibration,
 )
 from uav_fault_estimator.estimation.qp_problem import WindowQP
@@ -79,7 +78,7 @@ class EstimatorConfig:
     fault, or None for 0) [%²]: see arrival_cost.ArrivalCost; arrival_centre: "filter" (the
     arrival filter's mean) or "previous_window" (the previous window's estimate of the first
     point, as UAV eq. 17); faults: the estimated faults; solver: ProxSuite settings.
-    Defaults: the embedded UAV paper's setting, N = 50, four monotonic increasing faults.
+    Defaults: the embedded-estimation paper's setting, N = 50, four monotonic increasing faults.
     """
 
     horizon: int = 50
@@ -148,12 +147,6 @@ class EstimatorConfig:
     def prior_pct(self) -> np.ndarray:
         """The faults before any data [%]."""
         return np.array([fault.prior_pct for fault in self.faults])
-
-
-def suite_noise(parameters: Mapping[str, Any], tau_a_s: float) -> SuiteNoise:
-    """The per-sample Q of mhe_node's parameters for residuals filtered with tau_a_s [s]
-    (residual_node's F_a)."""
-    return SuiteNoise(noise_calibration(parameters), tau_a_s, parameters["noise_variance_factor"])
 
 
 def noise_calibration(parameters: Mapping[str, Any]) -> NoiseCalibration:

@@ -1,4 +1,5 @@
-"""Moving-horizon MAP fault estimator (embedded UAV paper section III-C, EF section VII).
+"""Moving-horizon MAP fault estimator (embedded-estimation paper section III-C,
+evolving-faults paper section VII).
 
 Each `update` takes one residual sample y(t) ∈ R^m, its signature S(t) ∈ R^{mxp} and a
 per-channel validity, and returns the MAP estimate over the last N samples. The QP

@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 from proxsuite import proxqp
-from uav_common.sample_grid import on_grid
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, aircraft_file
 from uav_sim.propeller import Propeller
 
@@ -42,6 +41,7 @@ from uav_fault_estimator.estimation.model_parameters import (
 from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration, white_share
 from uav_fault_estimator.estimation.prediction import AircraftPredictor
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
+from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
 from uav_fault_estimator.estimation.residuals import (
     WIND_AIR_DATA,
     WIND_FILTERED,
@@ -143,14 +143,14 @@ def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
     """The generator's samples on residual_node's update grid whose rows are all valid.
     Samples it refuses (a stamp that does not increase, a state the models cannot evaluate)
     are left out, as residual_node leaves them out."""
-    period_s = float(residual_parameters["update_period_s"])
+    sampler = ResidualSampler(generator, float(residual_parameters["update_period_s"]))
     for k, time_s in enumerate(flight.times_s):
         try:
-            sample = generator.update(time_s, flight.states[k], flight.controls[k],
-                                      flight.winds_ned_mps[k], air_data[k])
+            sample = sampler.update(time_s, flight.states[k], flight.controls[k],
+                                    flight.winds_ned_mps[k], air_data[k])
         except ValueError:
             continue
-        if sample is not None and on_grid(time_s, period_s) and sample.valid.all():
+        if sample is not None and sample.valid.all():
             yield sample
 
 

@@ -59,17 +59,15 @@ class SuiteNoise:
     the AR(1) white equivalent, still gave fault-free estimates of 3 %). Such samples are
     not used: the estimator holds its estimate (MovingHorizonEstimator.hold) through the
     loss and for HOLD_AFTER_TAU_A F_a time constants after it, while F_a still carries
-    that wind's error (it fades as exp(-t / tau_a)). Inputs: the calibration, tau_a_s
-    (residual_node's F_a [s]) and the variance factor (Q = factor times the variances).
+    that wind's error (it fades as exp(-t / tau_a), tau_a the residuals' own, per sample).
+    Inputs: the calibration and the variance factor (Q = factor times the variances).
     """
 
     # exp(-3) = 5 %: what F_a keeps of the filtered wind's error when the hold ends
     HOLD_AFTER_TAU_A = 3.0
 
-    def __init__(self, calibration: NoiseCalibration, tau_a_s: float,
-                 variance_factor: float) -> None:
+    def __init__(self, calibration: NoiseCalibration, variance_factor: float) -> None:
         self.calibration, self.variance_factor = calibration, variance_factor
-        self.hold_after_s = self.HOLD_AFTER_TAU_A * tau_a_s
         self.reset()
 
     def reset(self) -> None:
@@ -77,15 +75,16 @@ class SuiteNoise:
         self.last_filtered_s = -math.inf
         self.air_data_flown = False
 
-    def weigh(self, time_s: float, wind_source: int) -> np.ndarray | None:
-        """Q (6,) of the residual sample at time_s [s] whose newest model flew wind_source;
-        None when the estimator is to hold instead: the air data lost, or back for less
-        than hold_after_s [s]."""
+    def weigh(self, time_s: float, wind_source: int, tau_a_s: float) -> np.ndarray | None:
+        """Q (6,) of the residual sample at time_s [s] whose newest model flew wind_source,
+        filtered with F_a of time constant tau_a_s [s]; None when the estimator is to hold
+        instead: the air data lost, or back for less than HOLD_AFTER_TAU_A times tau_a_s."""
         if wind_source == WIND_FILTERED:
             self.last_filtered_s = time_s
             if self.air_data_flown:
                 return None
-        elif time_s - self.last_filtered_s < self.hold_after_s and self.air_data_flown:
+        elif (time_s - self.last_filtered_s < self.HOLD_AFTER_TAU_A * tau_a_s
+              and self.air_data_flown):
             return None
         else:
             self.air_data_flown = True

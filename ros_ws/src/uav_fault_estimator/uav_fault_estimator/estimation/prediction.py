@@ -7,7 +7,7 @@ without integrating. Per evaluation:
 
 - Wind: the filtered wind w_hat enters through the air-relative velocity. The predictor
   flies in still air with body velocity C_bn (v_ned - w_hat), because run_ic() resets the
-  wind to the initial-condition wind; turbulence stays off (../shared/AEROSONDE.md).
+  wind to the initial-condition wind; turbulence stays off.
 - Propeller: JSBSim's engine is switched off (`propulsion/jsbsim-engine-on` = 0): its
   propeller speed is a state run_ic() never advances. The thrust and hub moment at the
   measured engine speed come from the same propeller tables (uav_sim.propeller) and act
@@ -51,6 +51,7 @@ from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
 
+from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
 from uav_fault_estimator.estimation.residuals import PredictorFactory, ResidualGenerator
 
 _STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
@@ -152,3 +153,11 @@ def residual_generator(parameters: Mapping[str, Any],
         p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
         model.sensor_bias,
     )
+
+
+def residual_sampler(parameters: Mapping[str, Any],
+                     model: FlownAircraft = NOMINAL) -> ResidualSampler:
+    """residual_node's generator (residual_generator) on its update grid
+    (update_period_s)."""
+    return ResidualSampler(residual_generator(parameters, model),
+                           float(parameters["update_period_s"]))

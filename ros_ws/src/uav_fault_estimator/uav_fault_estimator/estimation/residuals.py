@@ -184,6 +184,7 @@ class ResidualGenerator:
         ]
         self.model_rebuilds = 0  # times the model copies gave NaN and were made anew
         self.column_names = tuple(column.name for column in self.columns)
+        self.tau_a_s = tau_a_s  # F_a's time constant: how long a residual remembers a wind
         self.observed_filter = LowPass(tau_a_s)
         self.predicted_filter = LowPass(tau_a_s)
         self.fuel_filter = SettlingLowPass(FUEL_MASS_TAU_S)

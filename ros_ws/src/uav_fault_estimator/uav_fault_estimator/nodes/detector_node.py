@@ -15,39 +15,35 @@ import sys
 from typing import Any
 
 from rclpy.node import Node
+from uav_common.envelope import (
+    AIR_DATA_LIMITS,
+    CONTROL_LIMITS,
+    SETPOINT_LIMITS,
+    STATE_LIMITS,
+    state_rate_gate,
+)
 from uav_common.message_fields import (
     air_data_array,
     controls_array,
     setpoints_array,
     state_array,
 )
+from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
 from uav_common.ros.messages import BODY_FRAME, header
-from uav_common.ros.node_tools import (
-    ERROR,
-    OK,
+from uav_common.ros.node_life import run_node, when_subscribed
+from uav_common.ros.parameters import (
     QOS_PARAMETER,
-    STREAM_QOS_PROFILES,
     WAIT_FOR_SUBSCRIBERS_PARAMETER,
-    WARN,
-    Diagnostics,
     ParameterSpec,
     declare_parameters,
-    run_node,
-    when_subscribed,
 )
+from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import (
     AircraftState,
     AirData,
     AutopilotSetpoints,
     ControlInputs,
     FaultAlarm,
-)
-from uav_sim.envelope import (
-    AIR_DATA_LIMITS,
-    CONTROL_LIMITS,
-    SETPOINT_LIMITS,
-    STATE_LIMITS,
-    state_rate_gate,
 )
 
 from uav_fault_estimator.detection.calibration_file import load_calibration

@@ -19,7 +19,9 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import qos_profile_parameter_events
 from rclpy.topic_endpoint_info import TopicEndpointInfo
-from uav_common.ros.node_tools import OK, Diagnostics, ParameterSpec, declare_parameters, run_node
+from uav_common.ros.diagnostics import OK, Diagnostics
+from uav_common.ros.node_life import run_node
+from uav_common.ros.parameters import ParameterSpec, declare_parameters
 
 from uav_fault_estimator.live_view import LiveView, parameter_name
 from uav_fault_estimator.nodes.raw_topics import RawTopics

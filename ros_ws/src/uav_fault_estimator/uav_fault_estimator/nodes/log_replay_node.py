@@ -22,6 +22,7 @@ from typing import Any
 import rclpy
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
+from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
     air_data_message,
     controls_message,
@@ -29,18 +30,10 @@ from uav_common.ros.messages import (
     stamp,
     state_message,
 )
-from uav_common.ros.node_tools import (
-    CLOCK_QOS,
-    OK,
-    QOS_PARAMETER,
-    STREAM_QOS_PROFILES,
-    WARN,
-    Diagnostics,
-    ParameterSpec,
-    declare_parameters,
-    run_node,
-)
+from uav_common.ros.node_life import run_node
 from uav_common.ros.paced_publishing import PacedPublishers
+from uav_common.ros.parameters import QOS_PARAMETER, ParameterSpec, declare_parameters
+from uav_common.ros.qos import CLOCK_QOS, STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import AircraftState, AirData, AutopilotSetpoints, ControlInputs
 
 from uav_fault_estimator.flight_logs.replay import load_replay

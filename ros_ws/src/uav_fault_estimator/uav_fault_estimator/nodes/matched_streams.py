@@ -9,9 +9,9 @@ from typing import Any
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
+from uav_common.envelope import RateGate, gate
 from uav_common.message_fields import stamp_nanoseconds
 from uav_common.ros.paced_publishing import ACK_EVERY_SAMPLES
-from uav_sim.envelope import RateGate, gate
 
 from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampMatcher, StampVerdict
 

@@ -15,38 +15,28 @@ from typing import Any
 import numpy as np
 from rclpy.node import Node
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
-from uav_common.package_data import default_parameters
+from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
 from uav_common.ros.messages import BODY_FRAME, header
-from uav_common.ros.node_tools import (
-    ERROR,
-    OK,
+from uav_common.ros.node_life import run_node, when_subscribed
+from uav_common.ros.parameters import (
     QOS_PARAMETER,
-    STREAM_QOS_PROFILES,
     WAIT_FOR_SUBSCRIBERS_PARAMETER,
-    WARN,
-    Diagnostics,
     ParameterError,
     ParameterSpec,
     declare_parameters,
-    run_node,
-    when_subscribed,
 )
+from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 
-from uav_fault_estimator.estimation.estimator_config import (
-    SOLVER_METHOD_KEY,
-    SOLVER_METHODS,
-    config_from_parameters,
-    suite_noise,
+from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY, SOLVER_METHODS
+from uav_fault_estimator.estimation.estimator_step import (
+    EstimatorStep,
+    RejectedSampleError,
+    ResidualInput,
+    StepResult,
 )
-from uav_fault_estimator.estimation.mhe import (
-    SUSPECT_SIGMAS,
-    EstimateResult,
-    MovingHorizonEstimator,
-    missing_samples,
-)
-from uav_fault_estimator.estimation.model_fit import DOES_NOT_FIT, ModelFit
-from uav_fault_estimator.estimation.noise_model import SUITES
+from uav_fault_estimator.estimation.mhe import SUSPECT_SIGMAS, EstimateResult
+from uav_fault_estimator.estimation.model_fit import DOES_NOT_FIT, FitVerdict
 from uav_fault_estimator.estimation.saved_estimate import (
     SavedEstimate,
     load_estimate,
@@ -56,7 +46,6 @@ from uav_fault_estimator.estimation.saved_estimate import (
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 from uav_fault_estimator.nodes.matched_streams import guarded
 from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
-from uav_fault_estimator.reporting.metrics import DETECTION_THRESHOLD_PCT, SETTLE_S
 
 # Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
 # it; variances and scales positive where the estimator divides by them; the horizon at
@@ -130,22 +119,15 @@ class MheNode(Node):
         self.parameters = declare_parameters(
             self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS, self.retune
         )
-        self.config = config_from_parameters(self.parameters, Residuals.CHANNELS)
-        # F_a of residual_node, as configured: the time its residuals remember a wind
-        self.noise = suite_noise(self.parameters, default_parameters(
-            "uav_fault_estimator", "residual_node.yaml")["tau_a_s"])
-        self.names = list(self.parameters["fault_names"])  # published
-        self.estimator = MovingHorizonEstimator(self.config)
-        self.estimated = self.estimator.column_names  # faults, then any nuisance parameters
+        self.step = EstimatorStep(self.parameters)
+        self.names = self.step.published_names
+        self.estimated = self.step.estimated_names  # faults, then any nuisance parameters
         qos = STREAM_QOS_PROFILES[self.parameters["qos"]]
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", qos)
         when_subscribed(self, self.publisher, self.parameters["wait_for_subscribers"],
                         lambda: self.create_subscription(
                             Residuals, "residuals", self.on_residuals, qos))
         self.diagnostics = Diagnostics(self)
-        self.model_fit = ModelFit(self.noise.calibration, self.parameters["model_fit_window_s"],
-                                  self.parameters["model_fit_threshold_sigmas"], SETTLE_S)
-        self.window_stamps_s: deque[float] = deque(maxlen=self.config.horizon)
         self.update_times_ms: deque[float] = deque(maxlen=RECENT_SOLVES)
         self.counts = {"updates": 0, "solves": 0, "not_solved": 0, "rejected_messages": 0,
                        "stamp_resets": 0, "gaps": 0, "held": 0,
@@ -158,12 +140,9 @@ class MheNode(Node):
     def retune(self, changes: dict[str, Any]) -> None:
         """Apply changed live parameters from the next residual on (ParameterError: none)."""
         try:
-            config = config_from_parameters({**self.parameters, **changes}, Residuals.CHANNELS)
-            self.estimator.retune(config)
+            self.step.retune(changes)
         except ValueError as error:
             raise ParameterError(str(error)) from None
-        self.config = config
-        self.noise.variance_factor = {**self.parameters, **changes}["noise_variance_factor"]
         self.get_logger().info("retuned: " + ", ".join(
             f"{name} = {value}" for name, value in changes.items()))
 
@@ -174,15 +153,11 @@ class MheNode(Node):
                                  stamp_nanoseconds(message.header.stamp), message,
                                  "estimator reset")
         if verdict is StampVerdict.RESTART:
-            self.estimator.reset()
-            self.noise.reset()
-            self.model_fit.reset()
-            self.window_stamps_s.clear()
+            self.step.reset()
             self.counts["stamp_resets"] += 1
         if verdict is StampVerdict.GAP:
             self.counts["gaps"] += 1
-            self.estimator.advance(missing_samples(self.stamps.guard.last_gap_ns / 1e9,
-                                                   self.window_stamps_s))
+            self.step.bridge(self.stamps.guard.last_gap_ns / 1e9)
         for stamp_ns, residuals in taken:
             self.resume(stamp_ns)
             self.estimate(residuals)
@@ -208,13 +183,13 @@ class MheNode(Node):
         saved, self.saved = self.saved, None
         if saved is None:
             return
-        prior = resumed_prior(saved, stamp_ns, self.config.prior_pct, self.estimated)
+        prior = resumed_prior(saved, stamp_ns, self.step.config.prior_pct, self.estimated)
         if prior is None:
             self.get_logger().warning(
                 f"state file {self.state_file} is of {saved.stamp_ns / 1e9:.3f} s, the first "
                 f"residual of {stamp_ns / 1e9:.3f} s: a new flight, starting from the prior")
             return
-        self.estimator.reset(prior)
+        self.step.reset(prior)
         self.counts["resumed_from_s"] = round(saved.stamp_ns / 1e9, 3)
         self.get_logger().info(
             f"resumed from {self.state_file}: the estimate of {saved.stamp_ns / 1e9:.3f} s, "
@@ -222,29 +197,25 @@ class MheNode(Node):
                                                         strict=True)))
 
     def estimate(self, message: Residuals) -> None:
-        """One estimator update with the residual, its estimate published."""
-        time_s = stamp_seconds(message.header.stamp)
-        columns = self.columns(message)
-        if columns is None:
+        """One estimator step with the residual, its estimate published."""
+        try:
+            step = self.step.update(ResidualInput(
+                stamp_seconds(message.header.stamp), np.array(message.residual),
+                np.array(message.valid), np.array(message.sensitivity),
+                message.fault_names, message.wind_source, message.filter_time_constant_s))
+        except RejectedSampleError as error:
+            self.reject(str(error))
             return
-        sensitivity = np.array(message.sensitivity).reshape(Residuals.CHANNELS, -1)
-        q_diag = self.noise.weigh(time_s, message.wind_source)
-        result = self.estimator.hold() if q_diag is None else self.estimator.update(
-            np.array(message.residual), sensitivity[:, columns], np.array(message.valid), q_diag)
-        self.window_stamps_s.append(time_s)
-        estimate = self.estimate_message(time_s, result)
+        estimate = self.estimate_message(message, step)
         self.publisher.publish(estimate)
-        self.count(result)
-        self.judge_fit(time_s, message, estimate)
+        self.count(step.estimate)
+        self.report_fit(step.fit)
         if self.state_file is not None:
             self.save(SavedEstimate(stamp_nanoseconds(message.header.stamp), tuple(self.names),
                                     tuple(estimate.values_pct)))
 
-    def judge_fit(self, time_s: float, message: Residuals, estimate: FaultEstimate) -> None:
-        """The model_fit status from the residual while no fault is reported."""
-        verdict = self.model_fit.update(
-            time_s, np.array(message.residual), np.array(message.valid), message.wind_source,
-            max(estimate.values_pct, default=0.0) >= DETECTION_THRESHOLD_PCT)
+    def report_fit(self, verdict: FitVerdict) -> None:
+        """The model_fit status on /diagnostics."""
         self.diagnostics.update_part(
             "model_fit", WARN if verdict.verdict == DOES_NOT_FIT else OK, verdict.text,
             {"verdict": verdict.verdict, "largest_mean_sigmas": f"{verdict.largest_sigmas:.2f}",
@@ -259,38 +230,23 @@ class MheNode(Node):
             self.get_logger().error(f"state file {self.state_file}: {error}; not kept")
             self.state_file = None
 
-    def columns(self, message: Residuals) -> list[int] | None:
-        """Indices of the estimated faults among the message's S columns; None (the message
-        dropped, counted and said) when a column is absent, S's size does not match its
-        names or the wind source is not one of the message's constants."""
-        offered = list(message.fault_names)
-        missing = [name for name in self.estimated if name not in offered]
-        reason = None
-        if missing:
-            reason = f"residuals lack the columns {missing}"
-        elif len(message.sensitivity) != Residuals.CHANNELS * len(offered):
-            reason = f"S has {len(message.sensitivity)} entries for {len(offered)} faults"
-        elif message.wind_source not in SUITES:
-            reason = f"unknown wind_source {message.wind_source}"
-        if reason is not None:
-            self.counts["rejected_messages"] += 1
-            self.get_logger().warning(f"residuals skipped: {reason}", throttle_duration_sec=5.0)
-            self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.health())
-            return None
-        return [offered.index(name) for name in self.estimated]
+    def reject(self, reason: str) -> None:
+        """A residual the step cannot use: dropped, counted and said."""
+        self.counts["rejected_messages"] += 1
+        self.get_logger().warning(f"residuals skipped: {reason}", throttle_duration_sec=5.0)
+        self.diagnostics.update(ERROR, f"residuals skipped: {reason}", self.health())
 
-    def estimate_message(self, time_s: float, result: EstimateResult) -> FaultEstimate:
-        stamps = self.window_stamps_s
-        published = result.columns(self.names)
+    def estimate_message(self, message: Residuals, step: StepResult) -> FaultEstimate:
+        result = step.estimate
         return FaultEstimate(
-            header=header(time_s, BODY_FRAME),
+            header=header(stamp_seconds(message.header.stamp), BODY_FRAME),
             names=self.names,
-            values_pct=result.fault_pct[published].tolist(),
+            values_pct=step.published_pct.tolist(),
             solver_status=int(result.status),
             updated=result.status is SolveStatus.SOLVED,
-            horizon=self.config.horizon,
-            horizon_s=stamps[-1] - stamps[0],
-            window_values_pct=result.window_pct[:, published].ravel().tolist(),  # row-major N x p
+            horizon=self.step.config.horizon,
+            horizon_s=step.horizon_s,
+            window_values_pct=step.window_pct.ravel().tolist(),  # row-major N x n
             iterations=result.iterations,
             solve_time_ms=result.update_time_ms,
             update_cpu_time_ms=result.update_cpu_ms,
@@ -299,8 +255,8 @@ class MheNode(Node):
     def health(self) -> dict[str, Any]:
         """The counters /diagnostics shows, the stamp guard's strays among them."""
         return {**self.counts, "stray_stamps": self.stamps.strays,
-                "budget_overruns": self.estimator.overruns,
-                "dropped_suspects": self.estimator.dropped_suspects}
+                "budget_overruns": self.step.estimator.overruns,
+                "dropped_suspects": self.step.estimator.dropped_suspects}
 
     def count(self, result: EstimateResult) -> None:
         """Counters and solve times for /diagnostics."""
@@ -322,7 +278,7 @@ class MheNode(Node):
         nuisance = {name: value for name, value in
                     zip(self.estimated, result.fault_pct, strict=True) if name not in self.names}
         self.diagnostics.update(level, text, {
-            SOLVER_METHOD_KEY: self.config.solver.method,
+            SOLVER_METHOD_KEY: self.step.config.solver.method,
             **self.health(),
             **{f"{name}_mps": f"{value:.2f}" for name, value in nuisance.items()},
             "median_ms": f"{np.median(times):.3f}",

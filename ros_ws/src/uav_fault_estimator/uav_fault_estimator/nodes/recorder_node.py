@@ -28,14 +28,9 @@ from rosbags.interfaces import (
     QosReliability,
     QosTime,
 )
-from uav_common.ros.node_tools import (
-    OK,
-    Diagnostics,
-    ParameterSpec,
-    declare_parameters,
-    run_node,
-    spin,
-)
+from uav_common.ros.diagnostics import OK, Diagnostics
+from uav_common.ros.node_life import run_node, spin
+from uav_common.ros.parameters import ParameterSpec, declare_parameters
 
 from uav_fault_estimator.nodes.raw_topics import RawTopics
 from uav_fault_estimator.recording.project_bag import Recording, project_typestore

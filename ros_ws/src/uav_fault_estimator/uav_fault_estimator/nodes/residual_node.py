@@ -15,29 +15,25 @@ import sys
 import time
 
 from rclpy.node import Node
-from uav_common.message_fields import air_data_array, controls_array, state_array, wind_array
-from uav_common.ros.messages import BODY_FRAME, header
-from uav_common.ros.node_tools import (
-    OK,
-    QOS_PARAMETER,
-    STREAM_QOS_PROFILES,
-    WAIT_FOR_SUBSCRIBERS_PARAMETER,
-    WARN,
-    Diagnostics,
-    ParameterSpec,
-    declare_parameters,
-    run_node,
-    when_subscribed,
-)
-from uav_common.sample_grid import GRID_TOLERANCE_S, next_grid_time
-from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
-from uav_sim.envelope import (
+from uav_common.envelope import (
     AIR_DATA_LIMITS,
     CONTROL_LIMITS,
     STATE_LIMITS,
     WIND_LIMITS,
     state_rate_gate,
 )
+from uav_common.message_fields import air_data_array, controls_array, state_array, wind_array
+from uav_common.ros.diagnostics import OK, WARN, Diagnostics
+from uav_common.ros.messages import BODY_FRAME, header
+from uav_common.ros.node_life import run_node, when_subscribed
+from uav_common.ros.parameters import (
+    QOS_PARAMETER,
+    WAIT_FOR_SUBSCRIBERS_PARAMETER,
+    ParameterSpec,
+    declare_parameters,
+)
+from uav_common.ros.qos import STREAM_QOS_PROFILES
+from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
 from uav_sim.flown_aircraft import NOMINAL
 
 from uav_fault_estimator.estimation.model_file import (
@@ -45,7 +41,7 @@ from uav_fault_estimator.estimation.model_file import (
     SHIPPED_MODEL,
     load_model_calibration,
 )
-from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residuals import (
     RESIDUAL_CHANNELS,
     WIND_AIR_DATA,
@@ -92,29 +88,28 @@ class ResidualNode(Node):
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
         calibration = p["model_calibration_file"]
         self.model = calibration or SHIPPED_MODEL
-        self.generator = residual_generator(
+        self.sampler = residual_sampler(
             p, load_model_calibration(calibration).aircraft if calibration else NOMINAL)
+        self.generator = self.sampler.generator
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(Residuals, "residuals", qos)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.restart, "filters reset",
                                       qos, OPTIONAL_STREAMS)
         when_subscribed(self, self.publisher, p["wait_for_subscribers"], self.streams.subscribe)
         self.diagnostics = Diagnostics(self)
-        self.next_publish_s: float | None = None
         self.counts = {"samples": 0, "published": 0, "rejected_samples": 0,
                        "filtered_wind_samples": 0}
         self.core_time_s = 0.0
 
     def restart(self) -> None:
         """The source restarted: the filters from scratch."""
-        self.generator.reset()
-        self.next_publish_s = None
+        self.sampler.reset()
 
     def process(self, time_s: float, payloads: dict) -> None:
         """One core update; publishes when the update period is due."""
         started = time.perf_counter()
         try:
-            sample = self.generator.update(
+            sample = self.sampler.update(
                 time_s, payloads["state"], payloads["controls"], payloads["wind/filtered"],
                 payloads.get("air_data"))
         except ValueError as error:  # a sample the model cannot evaluate: skipped
@@ -125,18 +120,14 @@ class ResidualNode(Node):
         finally:
             self.core_time_s += time.perf_counter() - started
         self.counts["samples"] += 1
+        newest = self.sampler.newest
+        if newest is not None and newest.wind_source != WIND_AIR_DATA:
+            self.counts["filtered_wind_samples"] += 1
         if sample is None:
             return
-        if sample.wind_source != WIND_AIR_DATA:
-            self.counts["filtered_wind_samples"] += 1
-        period_s = self.parameters["update_period_s"]
-        if self.next_publish_s is None:  # the first publication on the period's grid
-            self.next_publish_s = next_grid_time(time_s, period_s, after=False)
-        if time_s >= self.next_publish_s - GRID_TOLERANCE_S:
-            self.publisher.publish(self.message(sample))
-            self.counts["published"] += 1
-            self.next_publish_s = next_grid_time(time_s, period_s, after=True)
-            self.report(sample)
+        self.publisher.publish(self.message(sample))
+        self.counts["published"] += 1
+        self.report(sample)
 
     def message(self, sample: ResidualSample) -> Residuals:
         return Residuals(
@@ -146,6 +137,7 @@ class ResidualNode(Node):
             predicted=sample.predicted.tolist(),
             valid=sample.valid.tolist(),
             wind_source=sample.wind_source,
+            filter_time_constant_s=self.generator.tau_a_s,
             fault_names=list(self.generator.column_names),
             sensitivity=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
         )

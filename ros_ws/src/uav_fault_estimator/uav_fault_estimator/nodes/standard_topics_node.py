@@ -29,21 +29,18 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu, NavSatFix, NavSatStatus
 from std_msgs.msg import Float64, Header
 from tf2_msgs.msg import TFMessage
+from uav_common.envelope import STATE_LIMITS, gate, state_rate_gate
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds, state_array
-from uav_common.ros.node_tools import (
-    OK,
+from uav_common.ros.diagnostics import OK, WARN, Diagnostics
+from uav_common.ros.node_life import run_node, when_subscribed
+from uav_common.ros.parameters import (
     QOS_PARAMETER,
-    STREAM_QOS_PROFILES,
     WAIT_FOR_SUBSCRIBERS_PARAMETER,
-    WARN,
-    Diagnostics,
     ParameterSpec,
     declare_parameters,
-    run_node,
-    when_subscribed,
 )
+from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import AircraftState, FaultEstimate, FaultVector
-from uav_sim.envelope import STATE_LIMITS, gate, state_rate_gate
 
 from uav_fault_estimator.nodes.matched_streams import guarded
 from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict

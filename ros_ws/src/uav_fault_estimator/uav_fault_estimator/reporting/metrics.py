@@ -19,9 +19,6 @@ import numpy as np
 from uav_fault_estimator.estimation.estimator_config import SolverSettings
 from uav_fault_estimator.estimation.solve_status import SolveStatus
 
-SETTLE_S = 20.0                 # metrics.json's settle_s: errors counted from here [s]
-DETECTION_THRESHOLD_PCT = 2.0   # metrics.json's detection_threshold_pct [%]
-
 
 @dataclass(frozen=True)
 class EstimateSeries:

@@ -17,11 +17,10 @@ from uav_sim.mpc_guidance import FALLBACKS_KEY as GUIDANCE_FALLBACKS_KEY
 from uav_sim.mpc_guidance import METHOD_KEY as GUIDANCE_KEY
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
+from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_fault_estimator.estimation.model_file import MODEL_KEY
 from uav_fault_estimator.recording.project_bag import WALL_S, RecordingError
 from uav_fault_estimator.reporting.metrics import (
-    DETECTION_THRESHOLD_PCT,
-    SETTLE_S,
     AlarmSeries,
     EstimateSeries,
     SeededSeries,

@@ -29,6 +29,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
 from uav_common.message_fields import stamp_seconds
+from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
     air_data_message,
     controls_message,
@@ -39,18 +40,10 @@ from uav_common.ros.messages import (
     true_wind_message,
     wind_message,
 )
-from uav_common.ros.node_tools import (
-    CLOCK_QOS,
-    OK,
-    QOS_PARAMETER,
-    STREAM_QOS_PROFILES,
-    WARN,
-    Diagnostics,
-    ParameterSpec,
-    declare_parameters,
-    run_node,
-)
+from uav_common.ros.node_life import run_node
 from uav_common.ros.paced_publishing import PacedPublishers
+from uav_common.ros.parameters import QOS_PARAMETER, ParameterSpec, declare_parameters
+from uav_common.ros.qos import CLOCK_QOS, STREAM_QOS_PROFILES
 from uav_common.sample_grid import GRID_TOLERANCE_S
 from uav_fault_msgs.msg import (
     AircraftState,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from uav_common.channels import STATE_CHANNELS
-from uav_sim.envelope import STATE_RATE_BOUNDS, state_rate_gate
+from uav_common.envelope import STATE_RATE_BOUNDS, state_rate_gate
 
 NORTH = STATE_CHANNELS.index("velocity_north")
 ROLL_RATE = STATE_CHANNELS.index("roll_rate")

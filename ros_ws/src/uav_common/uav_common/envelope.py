@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from uav_common.channels import (
     AIR_DATA_CHANNELS,
     CONTROL_CHANNELS,

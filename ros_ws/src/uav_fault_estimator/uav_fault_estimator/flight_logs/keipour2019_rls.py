@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.benchmark import Fold, fault_free, in_folds

@@ -1,4 +1,4 @@
-"""The peer (benchmarks/keipour2019_rls.py) on pairs whose relation is known: its RLS learns a
+"""The peer (flight_logs/keipour2019_rls.py) on pairs whose relation is known: its RLS learns a
 command-to-response relation within the warm-up, its residual stays near the noise while the
 relation holds and rises when the response stops following the command; its thresholds
 come from the calibration flights' fault-free parts, and its alarms are counted by the
@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from uav_fault_estimator.flight_logs import keipour2019_rls as peer
 from uav_fault_estimator.flight_logs.ground_truth import NO_FAILURE, FlightTruth
-
-from benchmarks import keipour2019_rls as peer
 
 START_S = 1531900000.0
 NOISE = 0.002  # [rad or m/s] of the measured output

@@ -1,0 +1,152 @@
+"""One fault-estimation step per residual sample: what mhe_node does with each Residuals
+message and the offline chain with each residual sample, without ROS.
+
+Per sample: the estimated columns picked from the sample's S by name, Q from the sample's
+sensor suite (or a hold, noise_model.SuiteNoise), one moving-horizon update (mhe.py), and
+the model_fit verdict (model_fit.py) on the residual while no fault is reported.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from uav_fault_estimator.estimation.estimator_config import (
+    EstimatorConfig,
+    config_from_parameters,
+    noise_calibration,
+)
+from uav_fault_estimator.estimation.mhe import (
+    EstimateResult,
+    MovingHorizonEstimator,
+    missing_samples,
+)
+from uav_fault_estimator.estimation.model_fit import FitVerdict, ModelFit
+from uav_fault_estimator.estimation.noise_model import SUITES, SuiteNoise
+from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
+
+# The estimator has settled this long [s of sim time] after the first residual: errors are
+# judged from here (metrics.json's settle_s), and model_fit first judges a window this long.
+SETTLE_S = 20.0
+# A fault estimate at or above this is reported [%] (metrics.json's detection_threshold_pct).
+DETECTION_THRESHOLD_PCT = 2.0
+
+
+class RejectedSampleError(ValueError):
+    """A residual sample the step cannot use (columns missing, S's size, the suite)."""
+
+
+@dataclass(frozen=True)
+class ResidualInput:
+    """One residual sample as the step takes it: time_s [s]; residual (6,) and valid (6,)
+    in RESIDUAL_CHANNELS order; sensitivity (6 * p,) row-major, or (6, p), its columns
+    named by column_names; wind_source (noise_model.SUITES key) and the residual filter's
+    time constant tau_a_s [s] (how long a residual remembers the wind it flew)."""
+
+    time_s: float
+    residual: np.ndarray
+    valid: np.ndarray
+    sensitivity: np.ndarray
+    column_names: Sequence[str]
+    wind_source: int
+    tau_a_s: float
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """What one step gives: the estimator's result, the published faults' estimates
+    (published_names order) [%] and their window (N, n) [%], the window's span horizon_s
+    [s], and the model_fit verdict."""
+
+    estimate: EstimateResult
+    published_pct: np.ndarray
+    window_pct: np.ndarray
+    horizon_s: float
+    fit: FitVerdict
+
+
+def fault_reported(estimates_pct: np.ndarray) -> bool:
+    """Whether any of the estimates [%] is at or above the detection threshold."""
+    return bool(np.size(estimates_pct)) and float(np.max(estimates_pct)) >= (
+        DETECTION_THRESHOLD_PCT)
+
+
+class EstimatorStep:
+    """mhe_node's estimator from its parameters (config/mhe_node.yaml's keys), one step
+    per residual sample; reset for a new flight, retune for changed live parameters."""
+
+    def __init__(self, parameters: Mapping[str, Any]) -> None:
+        self.parameters = dict(parameters)
+        self.published_names = list(parameters["fault_names"])
+        self.estimator = MovingHorizonEstimator(
+            config_from_parameters(parameters, len(RESIDUAL_CHANNELS)))
+        self.estimated_names = self.estimator.column_names  # faults, then any nuisance
+        calibration = noise_calibration(parameters)
+        self.noise = SuiteNoise(calibration, parameters["noise_variance_factor"])
+        self.model_fit = ModelFit(calibration, parameters["model_fit_window_s"],
+                                  parameters["model_fit_threshold_sigmas"], SETTLE_S)
+        self.window_stamps_s: deque[float] = deque(maxlen=self.estimator.config.horizon)
+
+    @property
+    def config(self) -> EstimatorConfig:
+        """The estimator's configuration (estimator_config.EstimatorConfig)."""
+        return self.estimator.config
+
+    def reset(self, prior_pct: np.ndarray | None = None) -> None:
+        """A new flight: everything from scratch, the estimates from prior_pct (the
+        estimated columns' order) [%] when given, else the configured prior."""
+        self.estimator.reset(prior_pct)
+        self.noise.reset()
+        self.model_fit.reset()
+        self.window_stamps_s.clear()
+
+    def retune(self, changes: Mapping[str, Any]) -> None:
+        """Apply changed live parameters from the next sample on (ValueError: none)."""
+        parameters = {**self.parameters, **changes}
+        self.estimator.retune(config_from_parameters(parameters, len(RESIDUAL_CHANNELS)))
+        self.noise.variance_factor = parameters["noise_variance_factor"]
+        self.parameters = parameters
+
+    def bridge(self, gap_s: float) -> None:
+        """A gap of gap_s [s] in the samples: the window moves on by the samples missed."""
+        self.estimator.advance(missing_samples(gap_s, self.window_stamps_s))
+
+    def columns(self, sample: ResidualInput) -> list[int]:
+        """Indices of the estimated columns among the sample's; RejectedSampleError saying why
+        when a column is absent, S's size does not match its names, the suite is unknown or
+        the filter time constant is not a time."""
+        offered = list(sample.column_names)
+        missing = [name for name in self.estimated_names if name not in offered]
+        if missing:
+            raise RejectedSampleError(f"residuals lack the columns {missing}")
+        if np.size(sample.sensitivity) != len(RESIDUAL_CHANNELS) * len(offered):
+            raise RejectedSampleError(f"S has {np.size(sample.sensitivity)} entries for "
+                                 f"{len(offered)} faults")
+        if sample.wind_source not in SUITES:
+            raise RejectedSampleError(f"unknown wind_source {sample.wind_source}")
+        if not (math.isfinite(sample.tau_a_s) and sample.tau_a_s >= 0):
+            raise RejectedSampleError(f"filter time constant {sample.tau_a_s} s")
+        return [offered.index(name) for name in self.estimated_names]
+
+    def update(self, sample: ResidualInput) -> StepResult:
+        """One estimator update with the sample (RejectedSampleError, nothing changed, when it
+        cannot be used), its model_fit verdict."""
+        columns = self.columns(sample)
+        sensitivity = np.reshape(sample.sensitivity, (len(RESIDUAL_CHANNELS), -1))
+        q_diag = self.noise.weigh(sample.time_s, sample.wind_source, sample.tau_a_s)
+        estimate = self.estimator.hold() if q_diag is None else self.estimator.update(
+            np.asarray(sample.residual), sensitivity[:, columns], np.asarray(sample.valid),
+            q_diag)
+        self.window_stamps_s.append(sample.time_s)
+        published = estimate.columns(self.published_names)
+        published_pct = estimate.fault_pct[published]
+        fit = self.model_fit.update(sample.time_s, np.asarray(sample.residual),
+                                    np.asarray(sample.valid), sample.wind_source,
+                                    fault_reported(published_pct))
+        return StepResult(estimate, published_pct, estimate.window_pct[:, published],
+                          self.window_stamps_s[-1] - self.window_stamps_s[0], fit)

@@ -1,0 +1,88 @@
+"""The estimation step mhe_node and the offline chain share: columns picked by name, the
+published faults apart from nuisance columns, and a sample it cannot use refused without a
+trace."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from uav_common.channels import PAPER_FAULT_NAMES
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.estimation.estimator_step import (
+    EstimatorStep,
+    RejectedSampleError,
+    ResidualInput,
+)
+from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA
+
+PERIOD_S, SAMPLES, TAU_A_S = 0.5, 80, 4.0
+FAULTS = list(PAPER_FAULT_NAMES)
+
+
+def mhe_parameters() -> dict:
+    """mhe_node's shipped parameters."""
+    return default_parameters("uav_fault_estimator", "mhe_node.yaml")
+
+
+def samples(seed: int = 0) -> list[ResidualInput]:
+    """Residuals of a 6 % first fault from sample 20 on, with noise, S fixed and well
+    conditioned, columns in FAULTS order."""
+    rng = np.random.default_rng(seed)
+    sensitivity = np.eye(6, len(FAULTS)) * 0.05 + 0.005 * rng.normal(size=(6, len(FAULTS)))
+    faults_pct = np.zeros(len(FAULTS))
+    out = []
+    for k in range(SAMPLES):
+        faults_pct[0] = 6.0 if k >= 20 else 0.0
+        residual = sensitivity @ faults_pct + 0.01 * rng.normal(size=6)
+        out.append(ResidualInput(k * PERIOD_S, residual, np.ones(6, dtype=bool),
+                                 sensitivity.ravel(), FAULTS, WIND_AIR_DATA, TAU_A_S))
+    return out
+
+
+def run(step: EstimatorStep, inputs: list[ResidualInput]) -> np.ndarray:
+    return np.array([step.update(sample).published_pct for sample in inputs])
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("bad", [
+    {"column_names": FAULTS[:3]},
+    {"sensitivity": np.zeros(6 * len(FAULTS) + 1)},
+    {"wind_source": 7},
+    {"tau_a_s": float("nan")},
+])
+def test_a_sample_it_cannot_use_is_refused_and_changes_nothing(bad):
+    inputs = samples()
+    clean, tried = EstimatorStep(mhe_parameters()), EstimatorStep(mhe_parameters())
+    expected = run(clean, inputs)
+    before = run(tried, inputs[:40])
+    with pytest.raises(RejectedSampleError):
+        tried.update(dataclasses.replace(inputs[40], **bad))
+    after = run(tried, inputs[40:])
+    assert np.array_equal(np.vstack([before, after]), expected)
+    assert expected[-1, 0] == pytest.approx(6.0, abs=1.0)
+
+
+@pytest.mark.timeout(60)
+def test_columns_are_picked_by_name_and_only_the_faults_are_published():
+    """The same residuals with S's columns in another order and an extra column the
+    estimator does not estimate give the same estimates; nuisance wind-error columns,
+    when estimated, are not among the published faults."""
+    inputs = samples()
+    order = [2, 0, 3, 1]
+    extra = [dataclasses.replace(
+        sample, column_names=[FAULTS[j] for j in order] + ["propulsion_loss"],
+        sensitivity=np.column_stack([np.reshape(sample.sensitivity, (6, -1))[:, order],
+                                     np.ones(6)]).ravel()) for sample in inputs]
+    expected = run(EstimatorStep(mhe_parameters()), inputs)
+    assert np.array_equal(run(EstimatorStep(mhe_parameters()), extra), expected)
+    wind_errors = ["wind_north_error", "wind_east_error", "wind_down_error"]
+    with_nuisance = EstimatorStep({**mhe_parameters(), "estimate_wind_errors": True})
+    result = with_nuisance.update(dataclasses.replace(
+        inputs[0], column_names=FAULTS + wind_errors,
+        sensitivity=np.column_stack([np.reshape(inputs[0].sensitivity, (6, -1)),
+                                     np.zeros((6, 3))]).ravel()))
+    assert list(with_nuisance.estimated_names) == FAULTS + wind_errors
+    assert result.published_pct.shape == (len(FAULTS),)
+    assert result.window_pct.shape[1] == len(FAULTS)
