@@ -27,20 +27,15 @@ import time
 import numpy as np
 from uav_fault_estimator.campaigns import Campaign, campaign_options, exit_on_failed_tasks
 from uav_sim.flown_aircraft import NOMINAL
-from uav_sim.scenario import Scenario, SensorSuite
+from uav_sim.scenario import Scenario
 
 from studies.random_aircraft import (
+    CONDITIONS,
     EXCITATION,
     calibrate_scenarios,
     calibration_scenarios,
     calibration_study_arguments,
 )
-
-# name -> (turbulence level, sensor noise); the calibration flights' own is the last
-CONDITIONS = {"calm air, ideal sensors": ("none", False),
-              "calm air, sensor noise": ("none", True),
-              "turbulence, ideal sensors": ("from_wind", False),
-              "turbulence, sensor noise": ("from_wind", True)}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,12 +51,8 @@ class BiasTask:
 
 def flights_in(condition: str, seed_set: int, excite: bool = False) -> list[Scenario]:
     """The model's calibration flights of the seed set (with random_aircraft.EXCITATION
-    when excite), flown in the condition."""
-    turbulence, noise = CONDITIONS[condition]
-    return [dataclasses.replace(scenario, wind=dataclasses.replace(scenario.wind,
-                                                                    turbulence=turbulence),
-                                sensors=SensorSuite(air_data=True, noise=noise))
-            for scenario in calibration_scenarios(NOMINAL, seed_set, excite)]
+    when excite), flown in the condition (random_aircraft.CONDITIONS)."""
+    return calibration_scenarios(NOMINAL, seed_set, excite, condition)
 
 
 def calibrate_task(task: BiasTask) -> dict:

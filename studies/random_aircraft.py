@@ -71,6 +71,15 @@ SEED_STRIDE = 1000  # calibration flight seeds of aircraft k: the model's plus k
 # drag and mass, which level flight at one speed ties together).
 EXCITATION = ((60.0, 4.0, 0.0), (100.0, 0.0, 0.0), (140.0, 0.0, 30.0), (180.0, 0.0, 0.0),
               (220.0, 4.0, -30.0), (260.0, 0.0, 0.0))
+# What the calibration flights are flown in: name -> (turbulence level, sensor noise); the
+# last is the flights' own, the default. --calibration-condition takes the others, to tell
+# what the flights' turbulence and noise cost from what no fault-free flight of this kind
+# shows (the calm, ideal one).
+CONDITIONS = {"calm air, ideal sensors": ("none", False),
+              "calm air, sensor noise": ("none", True),
+              "turbulence, ideal sensors": ("from_wind", False),
+              "turbulence, sensor noise": ("from_wind", True)}
+OWN_CONDITION = "turbulence, sensor noise"
 # With --measured-mass-properties: half-widths of the ground measurement's error, uniform
 # (a CG on a balance within a few millimetres, an inertia from a pendulum within a few %)
 MEASUREMENT_ERROR = {"cg_offset_m": 0.003, "inertia_scale": 0.03}
@@ -108,11 +117,14 @@ def measured_mass_properties(aircraft: FlownAircraft, seed: int, index: int) -> 
                               MEASUREMENT_ERROR["inertia_scale"], 3))))
 
 
-def calibration_scenarios(aircraft: FlownAircraft, index: int,
-                          excite: bool = False) -> list[Scenario]:
+def calibration_scenarios(aircraft: FlownAircraft, index: int, excite: bool = False,
+                          condition: str = OWN_CONDITION) -> list[Scenario]:
     """The three calibration flights of aircraft number index (0: the model's own), with
-    the EXCITATION setpoint changes when excite."""
+    the EXCITATION setpoint changes when excite, flown in the condition (CONDITIONS)."""
+    turbulence, noise = CONDITIONS[condition]
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
+    base = dataclasses.replace(base, wind=dataclasses.replace(base.wind, turbulence=turbulence),
+                               sensors=dataclasses.replace(base.sensors, noise=noise))
     flights = []
     for airspeed_mps, seed, towards_deg, wind_mps in CALIBRATION_FLIGHTS:
         flight = wind_variant(base, seed + SEED_STRIDE * index, towards_deg, wind_mps)
@@ -168,6 +180,7 @@ class AircraftTask:
     parameters: tuple[str, ...]
     measured: FlownAircraft = NOMINAL
     excite: bool = False
+    condition: str = OWN_CONDITION
 
 
 def calibrate_scenarios(scenarios: list[Scenario], parameters: tuple[str, ...],
@@ -187,7 +200,8 @@ def study_aircraft(task: AircraftTask) -> dict:
     """Calibrate, check, fly the test flights and judge them (the module docstring)."""
     started = time.monotonic()
     calibration, flights, noise = calibrate_scenarios(
-        calibration_scenarios(task.aircraft, task.index, task.excite), task.parameters,
+        calibration_scenarios(task.aircraft, task.index, task.excite, task.condition),
+        task.parameters,
         task.measured)
     warnings = check_calibration(calibration, flights, noise)
     tests = test_metrics(task.aircraft, calibration.aircraft)
@@ -253,14 +267,20 @@ def main() -> int:
     parser.add_argument("--measured-mass-properties", action="store_true",
                         help="give the model each aircraft's CG and inertia as measured on the "
                              "ground (within MEASUREMENT_ERROR)")
+    parser.add_argument("--calibration-condition", choices=tuple(CONDITIONS),
+                        default=OWN_CONDITION,
+                        help="fly the calibration flights in this condition (default: their "
+                             "own, %(default)s)")
     arguments = calibration_study_arguments(parser)
     parameters, excite = arguments.parameters, arguments.excite
-    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite)]
+    condition = arguments.calibration_condition
+    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite, condition=condition)]
     for k in range(1, arguments.count + 1):
         aircraft = drawn_aircraft(arguments.seed, k)
         measured = (measured_mass_properties(aircraft, arguments.seed, k)
                     if arguments.measured_mass_properties else NOMINAL)
-        tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured, excite))
+        tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured, excite,
+                                  condition))
     started = time.monotonic()
     with Campaign(campaign_options(arguments)) as campaign:
         rows = campaign.results(study_aircraft, tasks, "aircraft")
@@ -277,6 +297,7 @@ def main() -> int:
             "measured_mass_properties": (MEASUREMENT_ERROR if arguments.measured_mass_properties
                                          else None),
             "excitation": EXCITATION if excite else None,
+            "calibration_condition": condition,
             "draw": DRAW, "targets": {"fault_free_below_pct": THRESHOLD_PCT,
                                       "rmse_share": RMSE_SHARE,
                                       "detected_within_s": DETECTED_WITHIN_S,

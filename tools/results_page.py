@@ -338,10 +338,11 @@ def random_aircraft(data: Mapping[str, Any]) -> list[str]:
     on_the_ground = ("the model given each aircraft's CG and inertia as measured on the "
                      f"ground (within {', '.join(f'{k} {number(v)}' for k, v in measured.items())})"
                      if measured else "nothing measured on the ground")
+    condition = data.get("calibration_condition", "turbulence, sensor noise")
     lines = [f"{data['count']} aircraft drawn with seed {data['seed']} (draw half-widths "
              f"{', '.join(f'{k} {number(v)}' for k, v in data['draw'].items())}) and the "
-             f"model's own; parameters {', '.join(data['parameters'])}; {on_the_ground}. "
-             "Targets: fault-free "
+             f"model's own; calibration flights in {condition}; parameters "
+             f"{', '.join(data['parameters'])}; {on_the_ground}. Targets: fault-free "
              f"largest below {number(targets['fault_free_below_pct'])} %, RMS at most "
              f"{number(100 * targets['rmse_share'])} % and final within "
              f"{number(100 * targets['final_share'])} % of each magnitude, found within "
@@ -453,13 +454,21 @@ SECTIONS = (
             "Flown aircraft that differ from the model, each flown through the ROS graph "
             "without and with a calibration from three fault-free flights of it at 22, 25 and "
             "28 m/s (docs/model_calibration.md)."),
-    Section("Random aircraft", "random_aircraft.json",
-            "python -m studies.random_aircraft --json docs/random_aircraft.json",
+    Section("Random aircraft", "random_aircraft*.json",
+            "python -m studies.random_aircraft --json docs/random_aircraft.json && "
+            "python -m studies.random_aircraft --count 12 --calibration-condition "
+            "'calm air, ideal sensors' --json docs/random_aircraft_ideal.json && "
+            "python -m studies.random_aircraft --count 12 --calibration-condition "
+            "'calm air, ideal sensors' --parameters coefficients,mass_scale,thrust_scale,"
+            "cg_y_cm,airspeed_scale,angle_of_attack_deg,sideslip_deg --json "
+            "docs/random_aircraft_ideal_all.json",
             random_aircraft,
             "Aircraft drawn at random about the model, each calibrated from three fault-free "
             "flights of it and flown through the offline chain with its calibration; the "
-            "calibration's own check beside whether the targets are met "
-            "(docs/model_calibration.md)."),
+            "calibration's own check beside whether the targets are met. The _ideal files: "
+            "the same aircraft calibrated from the same flights flown in calm air with ideal "
+            "sensors (the best these flights can give), with the default parameters and with "
+            "all 37 (every aerodynamic coefficient) (docs/model_calibration.md)."),
     Section("Calibration bias", "calibration_bias*.json",
             "python -m studies.calibration_bias --json docs/calibration_bias.json && "
             "python -m studies.calibration_bias --excite --json "
@@ -482,12 +491,12 @@ SECTIONS = (
             "The campaign layer: flights in one process against local Dask workers, the "
             "per-task cost, and the plan for a large map (docs/performance.md)."),
     Section("ALFA benchmark", "alfa_benchmark.json",
-            "python scripts/alfa_benchmark.py ../shared/alfa/flights --json "
+            "python scripts/alfa_benchmark.py ALFA/ --json "
             "docs/alfa_benchmark.json", alfa_benchmark,
             "The detector on 20 labelled real flights of CMU's ALFA dataset, each screened "
             "with a calibration from the other flights' fault-free parts (docs/flight_logs.md)."),
     Section("ALFA benchmark leaving a day out", "alfa_benchmark_days.json",
-            "python scripts/alfa_benchmark.py ../shared/alfa/flights --leave-out day --json "
+            "python scripts/alfa_benchmark.py ALFA/ --leave-out day --json "
             "docs/alfa_benchmark_days.json", alfa_benchmark,
             "The same flights, each day's flights screened with a calibration from the other "
             "four days' flights: what a new day (its weather, trims and sensor offsets) brings."),

@@ -26,6 +26,7 @@ from uav_fault_estimator.estimation.model_parameters import (
     DEFAULT_PARAMETERS,
     changed,
     model_parameter,
+    parameter_list,
     values_of,
 )
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
@@ -35,7 +36,7 @@ from uav_fault_estimator.recording.project_bag import (
     project_typestore,
     sensor_flight_from_recording,
 )
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
 
 # A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane, and its CG
@@ -80,6 +81,14 @@ def test_an_unknown_parameter_is_named():
         model_parameter("CDwing")
     for name in DEFAULT_PARAMETERS:
         model_parameter(name)
+
+
+@pytest.mark.timeout(10)
+def test_a_parameter_list_names_every_coefficient_at_once():
+    names = parameter_list("coefficients, mass_scale")
+    assert names == (*coefficient_names(), "mass_scale")
+    with pytest.raises(ValueError, match="each parameter once"):
+        parameter_list("coefficients, CDmin")
 
 
 @pytest.mark.timeout(120)

@@ -103,10 +103,17 @@ def model_parameter(name: str) -> ModelParameter:
                           bounds=_SCALE_LIMITS_PCT)
 
 
+# In a parameter list: every aerodynamic coefficient of aerosonde.xml
+EVERY_COEFFICIENT = "coefficients"
+
+
 def parameter_list(text: str) -> tuple[str, ...]:
-    """The parameters a comma-separated list names ("CDmin, Cmalpha"); ValueError naming
-    what is wrong when it names none, an unknown one or one twice."""
-    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    """The parameters a comma-separated list names ("CDmin, Cmalpha"; EVERY_COEFFICIENT for
+    all of aerosonde.xml's coefficients); ValueError naming what is wrong when it names
+    none, an unknown one or one twice."""
+    names = tuple(expanded for name in text.split(",") if name.strip()
+                  for expanded in (coefficient_names() if name.strip() == EVERY_COEFFICIENT
+                                   else (name.strip(),)))
     for name in names:
         model_parameter(name)
     if len(set(names)) != len(names) or not names:
