@@ -49,7 +49,7 @@ from uav_fault_estimator.estimation.estimator_config import (
     config_from_parameters,
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
-from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.offline import PACKAGE
@@ -88,19 +88,16 @@ def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
         duration_s=max(scenario.duration_s, samples * UPDATE_PERIOD_S + 30.0),
     )
     simulation = Simulation(scenario)
-    generator = residual_generator({**default_parameters(PACKAGE, "residual_node.yaml"),
-                                    "wind_error_step_mps": 1.0})
-    every = round(UPDATE_PERIOD_S / simulation.period_s)
+    sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
+                                "wind_error_step_mps": 1.0})
     rows = []
     sample = simulation.sample()
     while len(rows) < samples:
-        result = generator.update(sample.time_s, sample.state, sample.controls,
-                                  sample.wind_filtered_ned_mps, sample.air_data)
+        result = sampler.update(sample.time_s, sample.state, sample.controls,
+                                sample.wind_filtered_ned_mps, sample.air_data)
         # from the first fully valid residual on (the filters settled): every window's
         # QP is then strictly convex, as quadprog requires
-        if result is not None and (rows or result.valid.all()) and (
-            simulation.sample_count % every == 0
-        ):
+        if result is not None and (rows or result.valid.all()):
             rows.append((result.residual, result.sensitivity, result.valid))
         sample = simulation.step()
     return tuple(np.array(column) for column in zip(*rows, strict=True))

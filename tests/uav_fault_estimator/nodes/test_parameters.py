@@ -14,7 +14,6 @@ import rclpy
 from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from uav_common.package_data import default_parameters
 from uav_common.ros.parameter_files import wildcard_only_names
 from uav_common.ros.parameters import (
     ParameterError,
@@ -33,16 +32,10 @@ from uav_fault_estimator.nodes import (
 )
 from uav_sim.ros import sim_node
 
-NODES = {  # name: (package, config file, PARAMETERS)
-    "sim_node": ("uav_sim", "sim_node.yaml", sim_node.PARAMETERS),
-    "residual_node": ("uav_fault_estimator", "residual_node.yaml", residual_node.PARAMETERS),
-    "mhe_node": ("uav_fault_estimator", "mhe_node.yaml", mhe_node.PARAMETERS),
-    "detector_node": ("uav_fault_estimator", "detector_node.yaml", detector_node.PARAMETERS),
-    "recorder_node": ("uav_fault_estimator", "recorder_node.yaml", recorder_node.PARAMETERS),
-    "foxglove_node": ("uav_fault_estimator", "foxglove_node.yaml", foxglove_node.PARAMETERS),
-    "log_replay_node": ("uav_fault_estimator", "log_replay_node.yaml",
-                        log_replay_node.PARAMETERS),
-}
+NODES = {"sim_node": sim_node.PARAMETERS, "residual_node": residual_node.PARAMETERS,
+         "mhe_node": mhe_node.PARAMETERS, "detector_node": detector_node.PARAMETERS,
+         "recorder_node": recorder_node.PARAMETERS, "foxglove_node": foxglove_node.PARAMETERS,
+         "log_replay_node": log_replay_node.PARAMETERS}
 NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE, Parameter.Type.INTEGER_ARRAY,
            Parameter.Type.DOUBLE_ARRAY)
 MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
@@ -57,9 +50,8 @@ MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
 @pytest.mark.timeout(30)
 @pytest.mark.parametrize("name", NODES)
 def test_every_number_has_a_range_that_holds_its_default(name):
-    package, config, specs = NODES[name]
-    defaults = default_parameters(package, config)
-    assert set(specs) == set(defaults)
+    specs = NODES[name]
+    defaults = {parameter: spec.default for parameter, spec in specs.items()}
     for parameter, spec in specs.items():
         assert isinstance(spec, ParameterSpec) and spec.description, parameter
         kind = Parameter.Type.from_parameter_value(defaults[parameter])
@@ -73,7 +65,7 @@ def test_every_number_has_a_range_that_holds_its_default(name):
 
 @pytest.mark.timeout(10)
 def test_an_integer_is_taken_for_the_real_it_names_and_nothing_else_is_converted():
-    real, count = ParameterSpec("a real", 0.0, 10.0), ParameterSpec("a count", 2, 2000)
+    real, count = ParameterSpec("a real", 1.0, 0.0, 10.0), ParameterSpec("a count", 50, 2, 2000)
     value = checked_value("x", 4, Parameter.Type.DOUBLE, real)
     assert value == 4.0 and isinstance(value, float)
     values = checked_value("x", [1, 2], Parameter.Type.DOUBLE_ARRAY, real)
@@ -106,8 +98,7 @@ def test_declared_with_type_and_range_in_the_descriptor(context):
         Parameter("discovery_period_s", Parameter.Type.INTEGER, 1),
         Parameter("output_dir", Parameter.Type.STRING, "/tmp/somewhere")])
     try:
-        values = declare_parameters(node, "uav_fault_estimator", "recorder_node.yaml",
-                                    recorder_node.PARAMETERS)
+        values = declare_parameters(node, recorder_node.PARAMETERS)
         assert values == {"discovery_period_s": 1.0, "output_dir": "/tmp/somewhere"}
         assert isinstance(values["discovery_period_s"], float)
         descriptor = node.describe_parameter("discovery_period_s")
@@ -128,8 +119,7 @@ def test_an_unknown_override_is_named_before_anything_is_declared(context):
         Parameter("discovery_perod_s", Parameter.Type.DOUBLE, 1.0)])
     try:
         with pytest.raises(ParameterError, match=r"^unknown parameter discovery_perod_s "):
-            declare_parameters(node, "uav_fault_estimator", "recorder_node.yaml",
-                               recorder_node.PARAMETERS)
+            declare_parameters(node, recorder_node.PARAMETERS)
         assert not node.has_parameter("output_dir")
     finally:
         node.destroy_node()
@@ -308,8 +298,7 @@ def test_a_live_parameter_goes_to_the_node_checked_and_a_refusal_keeps_the_value
         applied.append(changes)
 
     try:
-        values = declare_parameters(node, "uav_fault_estimator", "detector_node.yaml",
-                                    detector_node.PARAMETERS, apply_changes)
+        values = declare_parameters(node, detector_node.PARAMETERS, apply_changes)
         assert not node.describe_parameter("false_alarm_probability").read_only
         assert node.describe_parameter("window").read_only
         (ok,) = node.set_parameters([Parameter("false_alarm_probability", value=0.001)])

@@ -18,20 +18,22 @@ from rcl_interfaces.msg import (
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from uav_common.package_data import default_parameters
 from uav_common.ros.parameter_files import wildcard_only_names
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 
 
 @dataclass(frozen=True)
 class ParameterSpec:
-    """What a node says about one of its parameters: its description; for numbers, the
-    closed range [low, high] its values (each element of an array) must lie in; for a
-    string, the choices it must be one of; and whether the node applies a change at run
-    time (live) or reads it once, at start (read-only). The default lives in the package's
-    config YAML alone, and its type is the default's type."""
+    """What a node says about one of its parameters, the one place it is declared: its
+    description (its unit in brackets at the end); its default, whose type is the
+    parameter's (4.0 a real, 4 an integer, [] a list of strings); for numbers, the closed
+    range [low, high] its values (each element of an array) must lie in; for a string, the
+    choices it must be one of; and whether the node applies a change at run time (live) or
+    reads it once, at start (read-only). The package's config/<node>.yaml and the docs'
+    parameter tables are generated from these (tools/parameter_pages.py)."""
 
     description: str
+    default: Any
     low: float | None = None
     high: float | None = None
     live: bool = False
@@ -44,13 +46,13 @@ class ParameterSpec:
 # Every stream node's `wait_for_subscribers` parameter (when_subscribed).
 WAIT_FOR_SUBSCRIBERS_PARAMETER = ParameterSpec(
     "subscribe to the inputs only once the node's output has this many subscriptions, so "
-    "that nothing it publishes is lost to discovery; 0: at once", 0, 100)
+    "that nothing it publishes is lost to discovery; 0: at once", 0, 0, 100)
 
 # Every stream node's `qos` parameter (STREAM_QOS_PROFILES).
 QOS_PARAMETER = ParameterSpec(
     "QoS of the node's sensor-rate streams: reliable (keep-all, nothing lost, a slow "
     "subscriber holds the publisher back) or sensor_data (best effort, newest 5: messages may "
-    "be lost); a reliable subscription does not hear a sensor_data publisher",
+    "be lost); a reliable subscription does not hear a sensor_data publisher", "reliable",
     choices=tuple(STREAM_QOS_PROFILES))
 
 
@@ -130,11 +132,10 @@ ApplyChanges = Callable[[dict[str, Any]], None]
 
 
 def declare_parameters(
-    node: Node, package: str, config_file: str, specs: Mapping[str, ParameterSpec | str],
-    apply_changes: ApplyChanges | None = None,
+    node: Node, specs: Mapping[str, ParameterSpec], apply_changes: ApplyChanges | None = None,
 ) -> dict[str, Any]:
-    """Declare each parameter with its default from the package's config YAML, its type and
-    range in its descriptor; the values by name.
+    """Declare each parameter with its default, type and range (its ParameterSpec) in its
+    descriptor; the values by name.
 
     Values given on the command line or in a --params-file override the defaults, after a
     check: of the type (an integer is taken for a real), of the range, and that the node has
@@ -144,12 +145,7 @@ def declare_parameters(
     Live parameters (ParameterSpec.live) changed at run time go, checked the same way, to
     apply_changes; once it has applied them the returned dict holds the new values.
     """
-    specs = {name: spec if isinstance(spec, ParameterSpec) else ParameterSpec(spec)
-             for name, spec in specs.items()}
-    defaults = default_parameters(package, config_file)
-    missing = set(specs) ^ set(defaults)
-    if missing:
-        raise KeyError(f"parameters without both a description and a default: {sorted(missing)}")
+    defaults = {name: spec.default for name, spec in specs.items()}
     # rclpy keeps the overrides meant for this node (-p, --params-file) here; there is no
     # public accessor, and declaring would take a wrong one with rclpy's own traceback.
     overrides = {name: parameter.value for name, parameter in node._parameter_overrides.items()}

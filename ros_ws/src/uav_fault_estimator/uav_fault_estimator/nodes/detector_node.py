@@ -53,14 +53,17 @@ from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
     "calibration_file": ParameterSpec("detector calibration YAML; empty: the package's "
-                                      "config/detector_calibration.yaml"),
-    "airframe": ParameterSpec("the airframe flown: the calibration must be of it"),
-    "window": ParameterSpec("M: GLRT window [samples]; must be the calibration's", 2, 1000),
+                                      "config/detector_calibration.yaml", ""),
+    "airframe": ParameterSpec("the airframe flown: the calibration must be of it",
+                              "aerosonde_sim"),
+    "window": ParameterSpec("M: GLRT window; must be the calibration's [samples of 0.2 s]", 25,
+                            2, 1000),
     # below 0.5 the RLS remembers about two samples: nothing left to identify
-    "forgetting_factor": ParameterSpec("lambda_f of the RLS; must be the calibration's",
-                                       0.5, 1.0),
+    "forgetting_factor": ParameterSpec(
+        "lambda_f of the RLS (memory about 200 samples, 40 s); must be the calibration's",
+        0.995, 0.5, 1.0),
     "false_alarm_probability": ParameterSpec(
-        "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds",
+        "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds", 0.01,
         1e-9, 0.5, live=True),
     "qos": QOS_PARAMETER,
     "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
@@ -79,8 +82,7 @@ class DetectorNode(Node):
 
     def __init__(self) -> None:
         super().__init__("detector_node")
-        p = declare_parameters(self, "uav_fault_estimator", "detector_node.yaml", PARAMETERS,
-                               self.retune)
+        p = declare_parameters(self, PARAMETERS, self.retune)
         calibration = load_calibration(p["calibration_file"], p["window"],
                                        p["forgetting_factor"], p["airframe"])
         self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])

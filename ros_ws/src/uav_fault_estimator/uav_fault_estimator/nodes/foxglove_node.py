@@ -30,14 +30,15 @@ from uav_fault_estimator.recording.project_bag import project_typestore
 
 PARAMETERS = {
     "host": ParameterSpec("address the WebSocket server listens on (127.0.0.1: this machine "
-                          "only)"),
+                          "only; 0.0.0.0 opens it to the network: anyone who reaches the "
+                          "port sees every topic and can set every live parameter)", "127.0.0.1"),
     "port": ParameterSpec("TCP port the WebSocket server listens on (0: one the system "
-                          "chooses, logged)", 0, 65535),
+                          "chooses, logged)", 8765, 0, 65535),
     "discovery_period_s": ParameterSpec(
-        "how often new topics are looked for [s, wall time]", 0.01, 60.0),
+        "how often new topics are looked for [s, wall time]", 0.2, 0.01, 60.0),
     "parameter_timeout_s": ParameterSpec(
         "longest one round of calls of a Foxglove parameter request waits for the "
-        "nodes' answers [s, wall time]",
+        "nodes' answers [s, wall time]", 2.0,
         0.1, 30.0),
 }
 REPORT_PERIOD_S = 1.0  # how often the diagnostics' counters are refreshed [s, wall time]
@@ -49,8 +50,7 @@ class FoxgloveNode(Node):
 
     def __init__(self) -> None:
         super().__init__("foxglove_node")
-        self.parameters = declare_parameters(
-            self, "uav_fault_estimator", "foxglove_node.yaml", PARAMETERS)
+        self.parameters = declare_parameters(self, PARAMETERS)
         host, port = self.parameters["host"], self.parameters["port"]
         self.ros_parameters = RosParameters(self, self.parameters["parameter_timeout_s"])
         sim_time = self.get_parameter("use_sim_time").value

@@ -39,20 +39,22 @@ from uav_fault_msgs.msg import AircraftState, AirData, AutopilotSetpoints, Contr
 from uav_fault_estimator.flight_logs.replay import load_replay
 
 PARAMETERS = {
-    "log": ParameterSpec("flight log: a PX4 .ulg, a ROS 1 .bag, a ROS 2 bag folder or a "
-                         "folder of per-topic CSV files"),
+    "log": ParameterSpec("flight log (required): a PX4 .ulg, a ROS 1 .bag, a ROS 2 bag folder or a "
+                         "folder of per-topic CSV files", ""),
     "airframe": ParameterSpec("airframe YAML mapping the log's actuator outputs to surfaces; "
-                              "empty for a log that carries surfaces (the project's recordings)"),
+                              "empty for a log that carries surfaces (the project's "
+                              "recordings)", ""),
     "axes": ParameterSpec("the log's body axes, FRD or FLU; empty: the airframe's, else the "
-                          "format's own"),
+                          "format's own", ""),
     # the detector acts on whole multiples of its calibration's period only
     "sample_period_s": ParameterSpec("period of the grid the log is resampled onto: the "
-                                     "detector calibration's [s]", 0.01, 10.0),
+                                     "detector calibration's [s]", 0.2, 0.01, 10.0),
     "real_time_factor": ParameterSpec(
-        "log seconds per wall second; 0: as fast as subscribers keep up", 0.0, 1000.0,
+        "log seconds per wall second; 0: as fast as subscribers keep up", 1.0, 0.0, 1000.0,
         live=True),
     "wait_for_subscribers": ParameterSpec(
-        "start once state has this many subscriptions and discovery settled", 0, 100),
+        "start once state has this many subscriptions and discovery settled (1: "
+        "detector_node beside it)", 1, 0, 100),
     "qos": QOS_PARAMETER,
 }
 
@@ -62,8 +64,7 @@ class LogReplayNode(Node):
 
     def __init__(self) -> None:
         super().__init__("log_replay_node")
-        self.parameters = declare_parameters(self, "uav_fault_estimator", "log_replay_node.yaml",
-                                             PARAMETERS, self.change_pace)
+        self.parameters = declare_parameters(self, PARAMETERS, self.change_pace)
         p = self.parameters
         if not p["log"]:
             raise ValueError("no flight log given: -p log:=FLIGHT.ulg (and -p "

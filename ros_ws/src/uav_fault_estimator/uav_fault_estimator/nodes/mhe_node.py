@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
+from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
 from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
 from uav_common.ros.messages import BODY_FRAME, header
@@ -51,60 +52,81 @@ from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
 # it; variances and scales positive where the estimator divides by them; the horizon at
 # most 2000 samples (1000 s at 0.5 s, three times the default flight): the QP grows with it.
 # Live: the weights and tolerances (MovingHorizonEstimator.retune); the rest shapes the QP.
+PAPER_FAULTS = len(PAPER_FAULT_NAMES)  # the paper's setting: N = 50, four monotonic faults
 PARAMETERS = {
-    "fault_names": ParameterSpec("the estimated faults: columns of the residuals' S, by name"),
-    "fault_models": ParameterSpec("per fault: monotonic, monotonic_decreasing, random_walk, "
-                                  "uniform, laplacian or constant"),
+    "fault_names": ParameterSpec("the estimated faults: columns of the residuals' S, by name",
+                                 list(PAPER_FAULT_NAMES)),
+    "fault_models": ParameterSpec(
+        "per fault: monotonic, monotonic_decreasing, random_walk, uniform, laplacian or "
+        "constant", ["monotonic"] * PAPER_FAULTS),
     "fault_model_scales_pct": ParameterSpec(
-        "per fault: the model's scale (lambda, sigma or a) [%/sample]", 1e-6, 100.0),
+        "per fault: the model's scale: lambda (monotonic: mean increment), sigma "
+        "(random_walk), a (uniform: |increment| <= a; laplacian: cost |increment| / a); "
+        "unused for constant [%/sample]", [0.5] * PAPER_FAULTS, 1e-6, 100.0),
     "fault_model_coefficients": ParameterSpec(
-        "per fault: a in f(t+1) = a f(t) + gamma (random_walk)", 0.0, 2.0),
-    "lower_bounds_pct": ParameterSpec("per fault: lower bound on f [%]", -1000.0, 1000.0),
-    "upper_bounds_pct": ParameterSpec("per fault: upper bound on f [%]", -1000.0, 1000.0),
-    "prior_pct": ParameterSpec("per fault: f before any data [%]", -1000.0, 1000.0),
-    "horizon": ParameterSpec("N: residual samples in the moving window", 2, 2000),
+        "per fault: a in f(t+1) = a f(t) + gamma (random_walk only; 1 elsewhere)",
+        [1.0] * PAPER_FAULTS, 0.0, 2.0),
+    # a loss or an increase is never negative
+    "lower_bounds_pct": ParameterSpec("per fault: lower bound on f [%]", [0.0] * PAPER_FAULTS,
+                                      -1000.0, 1000.0),
+    "upper_bounds_pct": ParameterSpec("per fault: upper bound on f [%]",
+                                      [100.0] * PAPER_FAULTS, -1000.0, 1000.0),
+    "prior_pct": ParameterSpec("per fault: f before any data [%]", [0.0] * PAPER_FAULTS,
+                               -1000.0, 1000.0),
+    "horizon": ParameterSpec("N: residual samples in the moving window", 50, 2, 2000),
     "noise_calibration_file": ParameterSpec(
         "residual noise per sensor suite (scripts/calibrate_estimator.py); empty: the shipped "
-        "config/residual_noise.yaml"),
+        "config/residual_noise.yaml", ""),
+    # 4: tuned on the default scenario (16, the AR(1) white equivalent of the 0.88
+    # correlation after F_a, delays the ramps; docs/estimator.md)
     "noise_variance_factor": ParameterSpec(
-        "Q = this factor times the calibrated variances (correlated noise: fewer independent "
-        "samples than the window holds); a change reweights the window", 1e-3, 1e6, live=True),
+        "Q = this factor times the calibrated variances of the sample's sensor suite "
+        "(correlated noise: fewer independent samples than the window holds); a change "
+        "reweights the window", 4.0, 1e-3, 1e6, live=True),
     "handover_variances_pct2": ParameterSpec(
         "R of eq. 17: per fault, the arrival cost's variance before any data [%^2]; a change "
-        "restarts the arrival cost at its mean with this variance", 1e-6, 1e6, live=True),
+        "restarts the arrival cost at its mean with this variance", [1.0] * PAPER_FAULTS,
+        1e-6, 1e6, live=True),
     "arrival_inflation": ParameterSpec(
-        "factor (>= 1) on the arrival cost's covariance every sample", 1.0, 10.0, live=True),
+        "factor (>= 1) on the arrival cost's covariance every sample: forget old data "
+        "faster", 1.0, 1.0, 10.0, live=True),
     "arrival_floor_variances_pct2": ParameterSpec(
-        "per fault: the least variance of the arrival cost [%^2]", 0.0, 1e6, live=True),
+        "per fault: the least variance of the arrival cost [%^2]", [0.0] * PAPER_FAULTS, 0.0,
+        1e6, live=True),
     "arrival_centre": ParameterSpec(
         "where the arrival cost is centred: filter (the arrival filter's mean) or "
-        "previous_window (the previous window's estimate, as the paper)"),
+        "previous_window (the previous window's estimate, as the paper)", "filter"),
+    # off: with air data the wind errors only add weakly observable columns (measured:
+    # fault-free largest estimate 1.73 vs 0.57 %, docs/estimator.md)
     "estimate_wind_errors": ParameterSpec(
         "also estimate the wind-estimate errors (S columns *_error of residual_node) as "
-        "random-walk nuisance parameters"),
+        "random-walk nuisance parameters", False),
     "wind_error_sigma_mps": ParameterSpec(
-        "random-walk step of each wind error per residual sample [m/s]", 1e-4, 10.0),
+        "random-walk step of each wind error per residual sample [m/s]", 0.2, 1e-4, 10.0),
     "wind_error_handover_variance_m2ps2": ParameterSpec(
-        "R of eq. 17 for each wind error [m^2/s^2]", 1e-6, 1e4, live=True),
+        "R of eq. 17 for each wind error [m^2/s^2]", 1.0, 1e-6, 1e4, live=True),
+    # active_set: about half ProxSuite's update time (docs/results.md)
     "solver_method": ParameterSpec(
         "proxsuite (any fault model) or active_set (exact, for monotonic faults only; "
-        "ProxSuite solves the windows where it does not settle)"),
+        "ProxSuite solves the windows where it does not settle in 30 rounds)", "proxsuite"),
     "solver_eps_abs": ParameterSpec("ProxSuite's absolute tolerance (on the scaled problem)",
-                                    1e-12, 0.1, live=True),
-    "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 1, 100000,
+                                    1e-6, 1e-12, 0.1, live=True),
+    "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 200, 1, 100000,
                                      live=True),
     "update_budget_ms": ParameterSpec(
         "an update longer than this drops the window's oldest sample beyond "
-        f"{SUSPECT_SIGMAS:g} noise deviations [ms]", 0.01, 60000.0, live=True),
+        f"{SUSPECT_SIGMAS:g} noise deviations, a glitch the gates let through [ms]", 100.0,
+        0.01, 60000.0, live=True),
     "model_fit_window_s": ParameterSpec(
-        "the model_fit status judges the fault-free residuals of this much sim time [s]",
+        "the model_fit status judges the fault-free residuals of this much sim time [s]", 60.0,
         5.0, 3600.0),
+    # 6: fault-free flights of the model itself reach 3.7-5.0 (docs/model_calibration.md)
     "model_fit_threshold_sigmas": ParameterSpec(
-        "model_fit says 'does not fit' when a residual's window mean is beyond this many of "
-        "its deviations", 0.5, 1000.0),
+        "model_fit says 'does not fit: recalibrate' when a residual's window mean is beyond "
+        "this many of its deviations", 6.0, 0.5, 1000.0),
     "state_file": ParameterSpec(
         "file for the last estimate: a restart within the flight (a first residual later "
-        "than the saved one) starts from it; empty: none"),
+        "than the saved one) starts from it; empty: none", ""),
     "qos": QOS_PARAMETER,
     "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
@@ -116,9 +138,7 @@ class MheNode(Node):
 
     def __init__(self) -> None:
         super().__init__("mhe_node")
-        self.parameters = declare_parameters(
-            self, "uav_fault_estimator", "mhe_node.yaml", PARAMETERS, self.retune
-        )
+        self.parameters = declare_parameters(self, PARAMETERS, self.retune)
         self.step = EstimatorStep(self.parameters)
         self.names = self.step.published_names
         self.estimated = self.step.estimated_names  # faults, then any nuisance parameters

@@ -40,9 +40,10 @@ from uav_fault_estimator.recording.project_bag import Recording, project_typesto
 DRAIN_LIMIT_S = 10.0
 INFINITE_QOS_S, INFINITE_QOS_NS = 2147483647, 4294967295  # rosbag2's "infinite" duration
 PARAMETERS = {
-    "output_dir": ParameterSpec("the rosbag2 directory to create (it must not exist yet)"),
+    "output_dir": ParameterSpec(
+        "the rosbag2 directory to create (required; it must not exist yet)", ""),
     "discovery_period_s": ParameterSpec(
-        "how often new topics are looked for [s, wall time]", 0.01, 60.0),
+        "how often new topics are looked for [s, wall time]", 0.2, 0.01, 60.0),
 }
 
 
@@ -73,8 +74,7 @@ class RecorderNode(Node):
 
     def __init__(self) -> None:
         super().__init__("recorder_node")
-        self.parameters = declare_parameters(
-            self, "uav_fault_estimator", "recorder_node.yaml", PARAMETERS)
+        self.parameters = declare_parameters(self, PARAMETERS)
         output = Path(self.parameters["output_dir"])
         if not self.parameters["output_dir"] or output.exists():
             raise ValueError(f"output_dir '{output}' must be given and must not exist")

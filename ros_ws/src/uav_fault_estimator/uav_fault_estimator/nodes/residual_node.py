@@ -15,6 +15,7 @@ import sys
 import time
 
 from rclpy.node import Node
+from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.envelope import (
     AIR_DATA_LIMITS,
     CONTROL_LIMITS,
@@ -50,21 +51,24 @@ from uav_fault_estimator.estimation.residuals import (
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
-    "fault_names": ParameterSpec("faults whose sensitivities are computed: the columns of S"),
-    "secant_step_pct": ParameterSpec("secant step s of the sensitivity, eq. 8 / 15 [%]",
+    "fault_names": ParameterSpec("faults whose sensitivities are computed: the columns of S",
+                                 list(PAPER_FAULT_NAMES)),
+    "secant_step_pct": ParameterSpec("secant step s of the sensitivity, eq. 8 / 15 [%]", 5.0,
                                      0.01, 100.0),
-    "tau_a_s": ParameterSpec("time constant of the smoothing filter F_a, eq. 5-6 [s]",
-                             0.1, 100.0),
+    "tau_a_s": ParameterSpec(
+        "time constant of the smoothing filter F_a, eq. 5-6 (the paper's 4 s) [s]", 4.0, 0.1,
+        100.0),
     "update_period_s": ParameterSpec(
-        "residuals are published every this much simulation time [s]", 0.01, 60.0),
+        "residuals are published every this much simulation time [s]", 0.5, 0.01, 60.0),
     "sensitivity_period_s": ParameterSpec(
-        "S is recomputed every this much simulation time; 0: every sample [s]", 0.0, 60.0),
+        "S is recomputed every this much simulation time; 0: every sample [s]", 0.5, 0.0, 60.0),
     "recovery_s": ParameterSpec(
-        "rows stay invalid this long after a missing channel is back [s]", 0.0, 600.0),
+        "rows stay invalid this long after the start and after a missing channel is "
+        "back (3 tau_a) [s]", 12.0, 0.0, 600.0),
     "wind_error_step_mps": ParameterSpec(
-        "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 10.0),
+        "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 0.0, 10.0),
     "model_calibration_file": ParameterSpec(
-        "model calibration YAML (scripts/calibrate_model.py); empty: aerosonde.xml as shipped"),
+        "model calibration YAML (scripts/calibrate_model.py); empty: aerosonde.xml as shipped", ""),
     "qos": QOS_PARAMETER,
     "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
@@ -80,9 +84,7 @@ class ResidualNode(Node):
 
     def __init__(self) -> None:
         super().__init__("residual_node")
-        self.parameters = declare_parameters(
-            self, "uav_fault_estimator", "residual_node.yaml", PARAMETERS
-        )
+        self.parameters = declare_parameters(self, PARAMETERS)
         p = self.parameters
         if not p["update_period_s"] > 0:
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")

@@ -48,12 +48,13 @@ from uav_fault_estimator.standard_frames import GeodeticPoint, StandardFrames, S
 
 PARAMETERS = {
     "map_origin_from_first_state": ParameterSpec(
-        "true: map's origin is the first state's position; false: map_origin"),
+        "true: map's origin is the first state's position; false: map_origin", True),
     "map_origin": ParameterSpec(
         "map's origin when not the first state's: latitude [deg], longitude [deg], altitude "
-        "[m]"),
-    "track_period_s": ParameterSpec("sim time between the track's poses [s]", 0.05, 60.0),
-    "track_poses": ParameterSpec("poses the track keeps, the newest", 2, 100000),
+        "[m]", [55.6, 12.5, 0.0]),
+    "track_period_s": ParameterSpec("sim time between the track's poses [s]", 1.0, 0.05, 60.0),
+    "track_poses": ParameterSpec("poses the track keeps, the newest (an hour at 1 s)", 3600,
+                                 2, 100000),
     "qos": QOS_PARAMETER,
     "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
@@ -132,8 +133,7 @@ class StandardTopicsNode(Node):
 
     def __init__(self) -> None:
         super().__init__("standard_topics_node")
-        p = declare_parameters(self, "uav_fault_estimator", "standard_topics_node.yaml",
-                               PARAMETERS)
+        p = declare_parameters(self, PARAMETERS)
         self.frames = StandardFrames(None if p["map_origin_from_first_state"]
                                      else _origin(p["map_origin"]))
         namespace = self.get_namespace().strip("/")

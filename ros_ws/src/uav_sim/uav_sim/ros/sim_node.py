@@ -60,19 +60,21 @@ from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
 
 PARAMETERS = {
-    "scenario": ParameterSpec("scenario YAML file; empty for the shipped default scenario"),
+    "scenario": ParameterSpec("scenario YAML file; empty: the shipped scenarios/default.yaml",
+                              ""),
     # at least 1 Hz; at most JSBSim's own 480 Hz (and a divisor of it: Simulation checks)
-    "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock [Hz]",
+    "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock, a divisor "
+                                    "of 480 [Hz]", 20.0,
                                     1.0, 480.0),
     "real_time_factor": ParameterSpec(
-        "simulated seconds per wall second; 0: as fast as subscribers keep up", 0.0, 1000.0,
+        "simulated seconds per wall second; 0: as fast as subscribers keep up", 1.0, 0.0, 1000.0,
         live=True),
     # longer by default than a leading simulator's own waits for acknowledgements (10 s)
     "clock_stall_s": ParameterSpec(
         "with use_sim_time: how long the followed /clock may stand still once running before "
-        "the node gives up [s, wall time]", 0.1, 3600.0),
+        "the node gives up [s, wall time]", 30.0, 0.1, 3600.0),
     "wait_for_subscribers": ParameterSpec(
-        "start once state has this many subscriptions and discovery settled", 0, 100),
+        "start once state has this many subscriptions and discovery settled", 0, 0, 100),
     "qos": QOS_PARAMETER,
 }
 CLOCK_POLL_S = 0.05  # wall time per wait for /clock when following it
@@ -83,8 +85,7 @@ class SimNode(Node):
 
     def __init__(self) -> None:
         super().__init__("sim_node")
-        self.parameters = declare_parameters(self, "uav_sim", "sim_node.yaml", PARAMETERS,
-                                             self.change_pace)
+        self.parameters = declare_parameters(self, PARAMETERS, self.change_pace)
         scenario_path = self.parameters["scenario"] or str(default_scenario_path())
         self.scenario = load_scenario(scenario_path)
         self.simulation = Simulation(
