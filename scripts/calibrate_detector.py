@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.calibration_output import write_calibration
 from uav_fault_estimator.campaigns import (
     Campaign,
     CampaignOptions,
@@ -39,7 +40,6 @@ from uav_fault_estimator.offline import (
     describe_flights,
     fault_free_flights,
     fly_on_grid_each,
-    write_calibration,
 )
 from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
 

@@ -21,6 +21,7 @@ import sys
 import time
 from pathlib import Path
 
+from uav_fault_estimator.calibration_output import write_calibration
 from uav_fault_estimator.campaigns import (
     Campaign,
     add_campaign_arguments,
@@ -37,7 +38,6 @@ from uav_fault_estimator.offline import (
     describe_flights,
     fault_free_flights,
     fault_free_residuals,
-    write_calibration,
 )
 from uav_sim.scenario import SensorSuite
 

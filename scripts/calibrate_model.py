@@ -39,6 +39,7 @@ import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.calibration_output import write_calibration
 from uav_fault_estimator.campaigns import (
     Campaign,
     add_campaign_arguments,
@@ -50,7 +51,6 @@ from uav_fault_estimator.estimation.model_calibration import CalibrationError, c
 from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
 from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
-from uav_fault_estimator.offline import write_calibration
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,

@@ -56,6 +56,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.calibration_output import write_calibration
 from uav_fault_estimator.campaigns import (
     CampaignOptions,
     add_campaign_arguments,
@@ -96,7 +97,6 @@ from uav_fault_estimator.flight_logs.screening import (
     plot_screening,
     write_alarm_csv,
 )
-from uav_fault_estimator.offline import write_calibration
 
 PROGRAM = "screen_logs.py"
 SCHEDULES = ("auto", "airspeed", "none")

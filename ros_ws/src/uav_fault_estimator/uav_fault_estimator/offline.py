@@ -8,12 +8,10 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import os
 from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
-import yaml
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
 from uav_common.package_data import default_parameters
 from uav_common.sample_grid import on_grid
@@ -196,14 +194,3 @@ def fault_free_flights(count: int, first_seed: int,
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
     return [wind_variant(base, first_seed + i, first_direction_deg + 360.0 * i / count,
                          5.0 + 0.25 * (i % 6)) for i in range(count)]
-
-
-def write_calibration(path: os.PathLike | str, header: str, calibration: Mapping[str, Any],
-                      flights: str, seconds: float) -> None:
-    """Write a calibration file, the calibration scripts' output: header (its comment lines,
-    saying what it was made from), then the calibration's file mapping as YAML in its own
-    key order; and say on stdout that it was made on `flights` ("12 flights") in
-    `seconds` of wall time [s]."""
-    with open(path, "w") as stream:
-        stream.write(header + yaml.safe_dump(dict(calibration), sort_keys=False))
-    print(f"calibrated on {flights} in {seconds:.1f} s: {path}")
