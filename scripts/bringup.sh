@@ -70,13 +70,8 @@ while [ $# -gt 0 ]; do
     esac
 done
 
-# One namespace per vehicle: --ns (or none) for one aircraft, /uav1, /uav2, ... for several.
-if [ ${#scenarios[@]} -gt 1 ]; then
-    [ -n "$ns" ] && die "--ns names the namespace of one aircraft; several --scenario fly /uav1, /uav2, ..."
-    vehicles=()
-    for k in "${!scenarios[@]}"; do vehicles+=("/uav$((k + 1))"); done
-else
-    vehicles=("$ns")
+if [ ${#scenarios[@]} -gt 1 ] && [ -n "$ns" ]; then
+    die "--ns names the namespace of one aircraft; several --scenario fly /uav1, /uav2, ..."
 fi
 
 "$root/scripts/setup.sh"
@@ -96,48 +91,33 @@ mkdir -p "$logs"
 logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
 
-declare -A packages=([sim_node]=uav_sim [residual_node]=uav_fault_estimator
-                     [mhe_node]=uav_fault_estimator [detector_node]=uav_fault_estimator
-                     [standard_topics_node]=uav_fault_estimator
-                     [foxglove_node]=uav_fault_estimator)
 declare -A pids=()        # by node key: <vehicle>/<node>, or <node> alone
 declare -A simulators=()  # the keys of the sim_nodes still flying
 
+# The graph (uav_fault_estimator.node_graph): a line per node in start order, KEY PACKAGE
+# EXECUTABLE and its ROS arguments, quoted for the shell.
+plan_args=()
+[ -n "$ns" ] && plan_args+=(--ns "$ns")
+[ -n "$params" ] && plan_args+=(--params "$params")
+for scenario in "${scenarios[@]}"; do plan_args+=(--scenario "$scenario"); done
+[ -n "$model_calibration" ] && plan_args+=(--model-calibration "$model_calibration")
+[ -n "$noise_calibration" ] && plan_args+=(--noise-calibration "$noise_calibration")
+[ -n "$foxglove" ] && plan_args+=(--foxglove)
+plan="$(python -m uav_fault_estimator.node_graph "${plan_args[@]}")" || exit 2
+
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:
 # a background job of a script starts with SIGINT ignored, and would keep it ignored.
-# start_node NAME VEHICLE_INDEX (empty: a node of the whole domain, foxglove_node)
+# start_node LINE (a line of the plan)
 start_node() {
-    local name="$1" index="$2" namespace="" key="$1"
-    local ros_args=()
-    if [ -n "$index" ]; then
-        namespace="${vehicles[$index]}"
-    elif [ ${#vehicles[@]} -eq 1 ]; then
-        namespace="$ns"
-    fi
-    if [ -n "$index" ] && [ ${#vehicles[@]} -gt 1 ]; then
-        key="${namespace#/}/$name"
-        mkdir -p "$logs/${namespace#/}"
-    fi
-    [ -n "$namespace" ] && ros_args+=(-r "__ns:=$namespace")
-    [ -n "$params" ] && ros_args+=(--params-file "$params")
-    if [ -n "$model_calibration" ] && [ "$name" = residual_node ]; then
-        ros_args+=(-p "model_calibration_file:=$model_calibration")
-    fi
-    if [ -n "$model_calibration" ] && [ "$name" = mhe_node ] && [ -n "$noise_calibration" ]; then
-        ros_args+=(-p "noise_calibration_file:=$noise_calibration")
-    fi
-    if [ "$name" = sim_node ] && [ ${#scenarios[@]} -gt 0 ]; then
-        ros_args+=(-p "scenario:=${scenarios[$index]}")
-    fi
-    # every node but the first simulator runs on its /clock
-    if [ "$name" != sim_node ] || [ "$index" != 0 ]; then
-        ros_args+=(-p use_sim_time:=true)
-    fi
+    local words key package executable
+    eval "words=($1)"
+    key="${words[0]}" package="${words[1]}" executable="${words[2]}"
+    mkdir -p "$(dirname "$logs/$key.log")"
     setsid env --default-signal=INT \
-        ros2 run "${packages[$name]}" "$name" --ros-args "${ros_args[@]}" \
+        ros2 run "$package" "$executable" --ros-args "${words[@]:3}" \
         >"$logs/$key.log" 2>&1 &
     pids[$key]=$!
-    [ "$name" = sim_node ] && simulators[$key]=1
+    [ "$executable" = sim_node ] && simulators[$key]=1
     return 0
 }
 
@@ -182,16 +162,11 @@ trap 'on_signal terminated 143' TERM
 trap 'stop_all' EXIT
 
 echo "bringup.sh: ROS domain $ROS_DOMAIN_ID${ns:+, namespace $ns}; logs in $logs/<node>.log"
-# the first vehicle's simulator last: the followers wait for the clock it starts
-for ((index = ${#vehicles[@]} - 1; index >= 0; index--)); do
-    for name in residual_node mhe_node detector_node standard_topics_node sim_node; do
-        start_node "$name" "$index"
-    done
-done
-[ -n "$foxglove" ] && start_node foxglove_node ""
-for namespace in "${vehicles[@]}"; do
-    topic="faults/estimate"
-    [ -n "$namespace" ] && topic="${namespace%/}/$topic"
+while IFS= read -r line; do start_node "$line"; done <<<"$plan"
+for key in "${!simulators[@]}"; do  # a vehicle's nodes: uavk/<node>, or under --ns
+    vehicle="${key%sim_node}"
+    topic="${vehicle:+/$vehicle}faults/estimate"
+    [ -z "$vehicle" ] && [ -n "$ns" ] && topic="${ns%/}/$topic"
     echo "bringup.sh: running; watch with: source scripts/env.sh; ros2 topic echo $topic"
 done
 if [ -n "$foxglove" ]; then

@@ -51,7 +51,6 @@ import yaml
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
 from uav_common.ros_processes import (
-    SIM_TIME_ROS_ARGS,
     RosProcess,
     exit_status_text,
     fast_flight_ros_args,
@@ -59,6 +58,7 @@ from uav_common.ros_processes import (
     ros2_run_argv,
     stop_all,
 )
+from uav_fault_estimator import node_graph
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
 from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
@@ -191,15 +191,10 @@ class Demo:
     """One run: the node processes, their watch, and their stop."""
 
     def __init__(self, vehicles: list[Vehicle], out: Path,
-                 model_calibration: Path | None = None, noise_file: Path | None = None) -> None:
-        """model_calibration: residual_node's model_calibration_file; noise_file: the noise
-        calibration it names, for mhe_node (None: none)."""
+                 calibration: node_graph.ModelCalibrationFiles | None = None) -> None:
+        """calibration: a model calibration's files for every vehicle (None: none)."""
         self.vehicles = vehicles
-        self.model_args = {"residual_node": [], "mhe_node": []}  # of a model calibration
-        if model_calibration is not None:
-            self.model_args = {
-                "residual_node": ["-p", f"model_calibration_file:={model_calibration}"],
-                "mhe_node": ["-p", f"noise_calibration_file:={noise_file}"] if noise_file else []}
+        self.calibration = calibration
         self.duration_s = vehicles[0].scenario.duration_s  # of every vehicle: one clock
         self.bag = out / "bag"
         self.logs = out / "logs"
@@ -212,16 +207,15 @@ class Demo:
         # per vehicle, one estimate per residual: residual_node runs with its defaults here
         self.expected = round(self.duration_s / residual_update_period_s())
 
-    def start(self, vehicle: Vehicle | None, package: str, executable: str,
+    def start(self, vehicle: Vehicle | None, executable: str,
               ros_args: list[str]) -> RosProcess:
-        """Start a node, of a vehicle (in its namespace) or of the run (None); every one on
-        /clock (use_sim_time) but the first vehicle's sim_node, which publishes it."""
+        """Start a node, of a vehicle or of the run (None), wired as node_graph says (its
+        namespace, the model calibration, /clock), with the demo's own ros_args."""
         name = vehicle.node_name(executable) if vehicle else executable
-        if vehicle is not None and vehicle.namespace:
-            ros_args = [*ros_args, "-r", f"__ns:={vehicle.namespace}"]
-        if not (executable == "sim_node" and vehicle is self.vehicles[0]):
-            ros_args = [*ros_args, *SIM_TIME_ROS_ARGS]
-        process = RosProcess(ros2_run_argv(package, executable, ros_args),
+        wiring = node_graph.node_ros_args(executable, vehicle.namespace if vehicle else "",
+                                          vehicle is self.vehicles[0], self.calibration)
+        process = RosProcess(ros2_run_argv(node_graph.PACKAGES[executable], executable,
+                                           [*ros_args, *wiring]),
                              self.logs / f"{name}.log")
         self.nodes[name] = process
         return process
@@ -286,7 +280,7 @@ class Demo:
         happened: stop() them. NodeEndedError when a node ends on its own, StalledError when
         nothing happens for too long."""
         self.progress = progress = Progress(self.vehicles)
-        self.start(None, "uav_fault_estimator", "recorder_node", ["-p", f"output_dir:={self.bag}"])
+        self.start(None, "recorder_node", ["-p", f"output_dir:={self.bag}"])
         if not self.watch(self.bag.exists, STARTUP_TIMEOUT_S):
             raise StalledError(
                 f"recorder_node did not create {self.bag} in {STARTUP_TIMEOUT_S:g} s")
@@ -294,13 +288,11 @@ class Demo:
             # each node takes its inputs once its output has every subscriber (OUTPUT_
             # SUBSCRIBERS), and each simulator starts once they take its state: then
             # nothing the nodes publish can be missed
-            self.start(vehicle, "uav_fault_estimator", "mhe_node",
+            self.start(vehicle, "mhe_node",
                        (["--params-file", str(vehicle.mhe_params)] if vehicle.mhe_params else [])
-                       + self.model_args["mhe_node"] + subscribers_args("mhe_node"))
-            self.start(vehicle, "uav_fault_estimator", "residual_node",
-                       self.model_args["residual_node"] + subscribers_args("residual_node"))
-            self.start(vehicle, "uav_fault_estimator", "detector_node",
-                       subscribers_args("detector_node"))
+                       + subscribers_args("mhe_node"))
+            self.start(vehicle, "residual_node", subscribers_args("residual_node"))
+            self.start(vehicle, "detector_node", subscribers_args("detector_node"))
         outputs = {"residuals": "residual_node", "faults/estimate": "mhe_node",
                    "faults/alarm": "detector_node"}
         if not self.watch(lambda: all(  # as the demo sees the graph: to say so if not
@@ -310,7 +302,7 @@ class Demo:
             raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
         started = time.monotonic()
         # the followers first: the first vehicle's simulator starts the clock
-        sims = [self.start(vehicle, "uav_sim", "sim_node",
+        sims = [self.start(vehicle, "sim_node",
                            fast_flight_ros_args(vehicle.scenario.path, STATE_SUBSCRIBERS))
                 for vehicle in reversed(self.vehicles)]
         simulators = tuple(vehicle.node_name("sim_node") for vehicle in self.vehicles)
@@ -467,7 +459,7 @@ def main() -> int:
         return 2
     out = (arguments.out or REPO_ROOT / "runs" / "+".join(
         scenario.name for scenario in scenarios)).resolve()
-    namespaces = [""] if len(scenarios) == 1 else [f"/uav{k + 1}" for k in range(len(scenarios))]
+    namespaces = node_graph.vehicle_namespaces(len(scenarios))
     try:
         prepare_output(out, *(scenario.path for scenario in scenarios))
         vehicles = []
@@ -491,7 +483,8 @@ def main() -> int:
         print(f"demo: {vehicle.namespace + ' flies ' if vehicle.namespace else ''}scenario "
               f"'{vehicle.scenario.name}' ({vehicle.scenario.path})", flush=True)
     print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
-    demo = Demo(vehicles, out, model_calibration, noise_file)
+    demo = Demo(vehicles, out, node_graph.ModelCalibrationFiles(model_calibration, noise_file)
+                if model_calibration else None)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
         received = demo.fly()

@@ -1,0 +1,74 @@
+"""The node graph both launchers start: its order, keys and wiring."""
+
+from __future__ import annotations
+
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from uav_fault_estimator.node_graph import (
+    ModelCalibrationFiles,
+    live_plan,
+    node_ros_args,
+    vehicle_namespaces,
+)
+
+SIM_TIME = ["-p", "use_sim_time:=true"]
+
+
+@pytest.mark.timeout(10)
+def test_several_aircraft_start_last_first_each_simulator_last():
+    plan = live_plan([Path("a.yaml"), Path("b.yaml")], foxglove=True)
+    assert [node.key for node in plan] == [
+        *(f"uav2/{n}" for n in ("residual_node", "mhe_node", "detector_node",
+                                "standard_topics_node", "sim_node")),
+        *(f"uav1/{n}" for n in ("residual_node", "mhe_node", "detector_node",
+                                "standard_topics_node", "sim_node")),
+        "foxglove_node"]
+    sims = {node.key: node.ros_args for node in plan if node.executable == "sim_node"}
+    # the first aircraft's simulator publishes /clock; every other node follows it
+    assert sims["uav1/sim_node"] == ["-r", "__ns:=/uav1", "-p", "scenario:=a.yaml"]
+    assert sims["uav2/sim_node"] == ["-r", "__ns:=/uav2", *SIM_TIME, "-p", "scenario:=b.yaml"]
+    assert all(node.ros_args[-2:] == SIM_TIME for node in plan
+               if node.executable != "sim_node")
+    assert plan[-1].ros_args == SIM_TIME  # the whole graph's: no namespace
+
+
+@pytest.mark.timeout(10)
+def test_a_model_calibration_wires_residual_and_mhe_nodes_after_the_parameter_file():
+    calibration = ModelCalibrationFiles(Path("/m.yaml"), Path("/n.yaml"))
+    plan = {node.key: node.ros_args for node in live_plan(
+        [], "/uav3", Path("/p.yaml"), calibration)}
+    assert plan["residual_node"] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", "-p",
+                                     "model_calibration_file:=/m.yaml", *SIM_TIME]
+    assert plan["mhe_node"][:6] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", "-p",
+                                    "noise_calibration_file:=/n.yaml"]
+    assert "model_calibration_file:=/m.yaml" not in plan["mhe_node"]
+    assert node_ros_args("detector_node", "", False, calibration) == SIM_TIME
+
+
+@pytest.mark.timeout(30)
+def test_the_plan_reads_back_in_a_shell_word_for_word():
+    spaced = Path("/runs/my flights/a b.yaml")
+    result = subprocess.run([sys.executable, "-m", "uav_fault_estimator.node_graph",
+                             "--scenario", str(spaced)], capture_output=True, text=True,
+                            check=True)
+    lines = result.stdout.splitlines()
+    assert [shlex.split(line) for line in lines] == [
+        [node.key, node.package, node.executable, *node.ros_args]
+        for node in live_plan([spaced])]
+    assert shlex.split(lines[-1])[-1] == f"scenario:={spaced}"
+
+
+@pytest.mark.timeout(30)
+def test_one_namespace_for_several_aircraft_is_refused():
+    assert vehicle_namespaces(1, "/uav7") == ["/uav7"]
+    assert vehicle_namespaces(3) == ["/uav1", "/uav2", "/uav3"]
+    with pytest.raises(ValueError, match="one aircraft"):
+        vehicle_namespaces(2, "/uav7")
+    result = subprocess.run([sys.executable, "-m", "uav_fault_estimator.node_graph", "--ns",
+                             "/x", "--scenario", "a", "--scenario", "b"],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1
