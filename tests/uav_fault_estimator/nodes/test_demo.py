@@ -14,12 +14,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from demo import OUTPUT_MARK, Demo, OutputFolderError, Vehicle, prepare_output
 from helpers.process_table import kill_all, nodes_logging_under
 from helpers.repo import SCRIPTS
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.package_data import default_parameters
 from uav_common.ros_processes import RosProcess, wait_until
+from uav_fault_estimator.demo_run import (
+    OUTPUT_MARK,
+    Demo,
+    OutputFolderError,
+    Vehicle,
+    prepare_output,
+)
 from uav_fault_estimator.estimation.model_file import SHIPPED_MODEL
 from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.recording.project_bag import project_typestore, read_topics

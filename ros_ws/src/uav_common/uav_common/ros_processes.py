@@ -1,5 +1,5 @@
 """Start ROS nodes and tools as processes the way a user would, and always stop them; a ROS
-domain id of a run's own. No rclpy here: scripts/demo.py and the tests share this module.
+domain id of a run's own. No rclpy here: the demo (demo_run.py) and the tests share this module.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The node graph, described once: the nodes that fly and diagnose an aircraft, their
 packages, their start order, and the ROS arguments that wire them for one aircraft or
-several (namespaces, the one clock, a model calibration). scripts/demo.py and
+several (namespaces, the one clock, a model calibration). demo_run.py (demo.sh) and
 scripts/bringup.sh start what it says (no ROS here).
 
     python -m uav_fault_estimator.node_graph [--ns NS] [--scenario FILE ...]
