@@ -9,8 +9,8 @@ RECORDING: a rosbag2 folder (demo.sh's DIR/bag, bringup's or recorder_node's) wi
 fault. Identifies the model's parameters (default: model_parameters.DEFAULT_PARAMETERS; any
 aerodynamic coefficient of aerosonde.xml by name or all of them as `coefficients`,
 mass_scale, thrust_scale, inertia_{x,y,z}_scale, cg_{x,y,z}_cm, airspeed_scale,
-angle_of_attack_deg, sideslip_deg) so
-that the models fit the flights' accelerations (estimation/model_calibration.py), prints
+angle_of_attack_deg, sideslip_deg) so that the models fit the flights' accelerations
+(estimation/model_calibration.py), prints
 each with its posterior deviation and the pairs the flights cannot separate, then checks the fit
 (estimation/calibration_check.py: the weighted residual, parameters pushed beyond two prior
 deviations, a residual channel with a structured remainder in a flight regime) and prints a

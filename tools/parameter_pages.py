@@ -27,6 +27,7 @@ from typing import Any
 
 import yaml
 from uav_common.ros.parameters import ParameterSpec
+from uav_fault_estimator.node_graph import PACKAGES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 END = "<!-- end of parameters -->"
@@ -38,13 +39,16 @@ EN_DASH, TIMES = "\u2013", "\u00d7"  # the docs' range dash and "x 4"
 
 @dataclass(frozen=True)
 class NodeParameters:
-    """A node: its name, package, the module that declares its PARAMETERS, and the docs
-    page whose table lists them."""
+    """A node: its name, the module that declares its PARAMETERS, and the docs page whose
+    table lists them; its package is the node graph's (node_graph.PACKAGES)."""
 
     name: str
-    package: str
     module: str
     page: str
+
+    @property
+    def package(self) -> str:
+        return PACKAGES[self.name]
 
     @property
     def specs(self) -> Mapping[str, ParameterSpec]:
@@ -55,22 +59,13 @@ class NodeParameters:
         return REPO_ROOT / "ros_ws" / "src" / self.package / "config" / f"{self.name}.yaml"
 
 
-ESTIMATOR = "uav_fault_estimator"
 NODES = (
-    NodeParameters("sim_node", "uav_sim", "uav_sim.ros.sim_node", "docs/simulator.md"),
-    NodeParameters("residual_node", ESTIMATOR, f"{ESTIMATOR}.nodes.residual_node",
-                   "docs/residuals.md"),
-    NodeParameters("mhe_node", ESTIMATOR, f"{ESTIMATOR}.nodes.mhe_node", "docs/estimator.md"),
-    NodeParameters("detector_node", ESTIMATOR, f"{ESTIMATOR}.nodes.detector_node",
-                   "docs/detector.md"),
-    NodeParameters("standard_topics_node", ESTIMATOR,
-                   f"{ESTIMATOR}.nodes.standard_topics_node", "docs/ros_interface.md"),
-    NodeParameters("recorder_node", ESTIMATOR, f"{ESTIMATOR}.nodes.recorder_node",
-                   "docs/ros_interface.md"),
-    NodeParameters("foxglove_node", ESTIMATOR, f"{ESTIMATOR}.nodes.foxglove_node",
-                   "docs/ros_interface.md"),
-    NodeParameters("log_replay_node", ESTIMATOR, f"{ESTIMATOR}.nodes.log_replay_node",
-                   "docs/flight_logs.md"),
+    NodeParameters("sim_node", "uav_sim.ros.sim_node", "docs/simulator.md"),
+    *(NodeParameters(name, f"uav_fault_estimator.nodes.{name}", page) for name, page in (
+        ("residual_node", "docs/residuals.md"), ("mhe_node", "docs/estimator.md"),
+        ("detector_node", "docs/detector.md"), ("standard_topics_node", "docs/ros_interface.md"),
+        ("recorder_node", "docs/ros_interface.md"), ("foxglove_node", "docs/ros_interface.md"),
+        ("log_replay_node", "docs/flight_logs.md"))),
 )
 
 

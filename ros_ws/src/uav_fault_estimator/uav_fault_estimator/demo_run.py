@@ -115,7 +115,7 @@ class Vehicle:
 
     def node_name(self, executable: str) -> str:
         """How the demo names one of its nodes: `uav1/mhe_node`, or `mhe_node` alone."""
-        return f"{self.namespace.strip('/')}/{executable}".lstrip("/")
+        return node_graph.node_key(self.namespace, executable)
 
 
 class Progress:

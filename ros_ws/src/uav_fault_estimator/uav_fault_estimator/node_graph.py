@@ -26,7 +26,8 @@ SIMULATOR = "sim_node"
 PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
             "mhe_node": "uav_fault_estimator", "detector_node": "uav_fault_estimator",
             "standard_topics_node": "uav_fault_estimator",
-            "recorder_node": "uav_fault_estimator", "foxglove_node": "uav_fault_estimator"}
+            "recorder_node": "uav_fault_estimator", "foxglove_node": "uav_fault_estimator",
+            "log_replay_node": "uav_fault_estimator"}
 # Each aircraft's nodes in start order: the simulator last, once the others listen.
 VEHICLE_NODES = ("residual_node", "mhe_node", "detector_node", "standard_topics_node",
                  SIMULATOR)
@@ -38,6 +39,12 @@ def vehicle_namespaces(count: int, namespace: str = "") -> list[str]:
     if count > 1 and namespace:
         raise ValueError("a namespace names one aircraft's; several fly /uav1, /uav2, ...")
     return [namespace] if count <= 1 else [f"/uav{k + 1}" for k in range(count)]
+
+
+def node_key(namespace: str, executable: str) -> str:
+    """How a launcher names a node of an aircraft in namespace ("" for the whole graph or a
+    lone aircraft): `uav1/mhe_node`, or `mhe_node`; also its log's path under the logs."""
+    return f"{namespace.strip('/')}/{executable}".lstrip("/")
 
 
 @dataclass(frozen=True)
@@ -96,7 +103,7 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
             args = [*common, *node_ros_args(executable, vehicle, index == 0, calibration)]
             if executable == SIMULATOR and scenarios:
                 args += ["-p", f"scenario:={scenarios[index]}"]
-            key = f"{vehicle.strip('/')}/{executable}" if len(namespaces) > 1 else executable
+            key = node_key(vehicle if len(namespaces) > 1 else "", executable)
             plan.append(PlannedNode(key, PACKAGES[executable], executable, args))
     if foxglove:
         only = namespaces[0] if len(namespaces) == 1 else ""
