@@ -1,15 +1,17 @@
 #!/usr/bin/env python3
-"""Benchmark of the campaign layer: detectability's flights in this process against two
-local Dask workers, the per-task cost of the Dask path against a process pool, and what a
+"""Benchmark of the campaign layer: estimator flights in this process against two local
+Dask workers, the per-task cost of the Dask path against a process pool, and what a
 10,000-flight detectability map would take.
 
     python -m benchmarks.bench_campaigns [--flights 40] [--tiny-tasks 400] [--json FILE]
 
-Flights: the first --flights of studies/detectability.py's table (each a 300 s flight through
-the offline chain, the estimator on it). Per-task cost: a task that returns its input, run
-warm (after a first round) through Campaign on two workers and through a two-process
-ProcessPoolExecutor (spawned), wall time per task; the cluster's start-up apart. The plan
-scales the measured seconds per flight, result size and worker memory to 10,000 flights.
+Flights: the shipped default and fault_free scenarios in turn, each in a wind of its own
+(turbulence seeds from 401, 5-6.25 m/s in --flights directions); each a 300 s flight through
+the offline chain, the estimator on it, summarised by its fault metrics. Per-task cost: a
+task that returns its input, run warm (after a first round) through Campaign on two workers
+and through a two-process ProcessPoolExecutor (spawned), wall time per task; the cluster's
+start-up apart. The plan scales the measured seconds per flight, result size and worker
+memory to 10,000 flights.
 """
 
 from __future__ import annotations
@@ -25,11 +27,28 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from uav_fault_estimator.campaigns import Campaign, CampaignOptions
-
-from studies.detectability import figures, flights
+from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
+from uav_fault_estimator.offline import fly_and_estimate, wind_variant
+from uav_fault_estimator.reporting.metrics import fault_metrics
+from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 
 WORKERS = 2
 MAP_FLIGHTS = 10_000
+FIRST_SEED = 401  # other seeds than the calibrations' (101-112, 201-212, 301-304)
+
+
+def benchmark_flights(count: int) -> list[Scenario]:
+    """count flights: the default and fault_free scenarios in turn, each in its own wind."""
+    shipped = default_scenario_path()
+    bases = (load_scenario(shipped), load_scenario(shipped.parent / "fault_free.yaml"))
+    return [wind_variant(bases[i % 2], FIRST_SEED + i, 360.0 * i / count, 5.0 + 0.25 * (i % 6))
+            for i in range(count)]
+
+
+def flight_figures(scenario: Scenario) -> dict:
+    """One flight's fault metrics (per fault: rmse, delay, ...), the campaign's result."""
+    estimates, seeded = fly_and_estimate(scenario)
+    return fault_metrics(estimates, seeded, SETTLE_S, DETECTION_THRESHOLD_PCT)[0]
 
 
 def echo(value: int) -> int:
@@ -43,18 +62,18 @@ def peak_memory_mb() -> float:
 
 
 def flights_serial_and_parallel(count: int) -> dict:
-    """count detectability flights in this process and on WORKERS local workers; the two
+    """count benchmark flights in this process and on WORKERS local workers; the two
     results must be equal (the campaign layer's promise)."""
-    scenarios = [scenario for *_, scenario in flights(seeds=5)][:count]
+    scenarios = benchmark_flights(count)
     started = time.perf_counter()
     serial = Campaign(CampaignOptions(workers=0, progress=False)).run(
-        figures, scenarios, "serial")
+        flight_figures, scenarios, "serial")
     serial_s = time.perf_counter() - started
     started = time.perf_counter()
     with Campaign(CampaignOptions(workers=WORKERS, progress=False)) as campaign:
         campaign.client()  # the cluster's start-up, timed apart
         startup_s = time.perf_counter() - started
-        parallel = campaign.run(figures, scenarios, "two workers")
+        parallel = campaign.run(flight_figures, scenarios, "two workers")
         memory_mb = max(campaign.client().run(peak_memory_mb).values())
     parallel_s = time.perf_counter() - started
     assert serial.failures == parallel.failures == [] and serial.results == parallel.results

@@ -52,18 +52,13 @@ from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEsti
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP
+from uav_fault_estimator.estimation.reference_solution import ClarabelSolver, solve_reference
 from uav_fault_estimator.offline import PACKAGE
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
-from benchmarks.qp_solvers import (
-    ClarabelSolver,
-    OSQPSolver,
-    PIQPSolver,
-    QuadprogSolver,
-    solve_reference,
-)
+from benchmarks.qp_solvers import OSQPSolver, PIQPSolver, QuadprogSolver
 
 UPDATE_PERIOD_S = residual_update_period_s()  # residual_node's, as the node publishes
 ACTIVE_PCT = 1e-6  # an increment or a bound this close to its limit counts as active [%]

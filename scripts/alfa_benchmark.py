@@ -57,6 +57,7 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, DetectorSample
 from uav_fault_estimator.detection.generators import generator_names
+from uav_fault_estimator.flight_logs import keipour2019_rls as peer
 from uav_fault_estimator.flight_logs.benchmark import (
     ONSET_MARGIN_S,
     Fold,
@@ -81,11 +82,6 @@ from uav_fault_estimator.flight_logs.ground_truth import FlightTruth, alfa_truth
 from uav_fault_estimator.flight_logs.readers import log_paths
 from uav_fault_estimator.flight_logs.replay import ReplayTask, replay_of
 from uav_fault_estimator.flight_logs.screening import alarm_intervals, plot_screening
-
-# The peer (benchmarks/, a reference kept out of the installed packages) is imported from
-# the clone this script belongs to.
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from uav_fault_estimator.flight_logs import keipour2019_rls as peer
 
 PROGRAM = "alfa_benchmark.py"
 ALFA_GENERATORS = ("roll_tracking", "pitch_tracking", "climb_tracking", "lateral_force")

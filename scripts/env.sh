@@ -1,6 +1,7 @@
 # Shell environment of the project, to be sourced: `source scripts/env.sh`.
-# Activates .venv, sources the colcon install space, keeps DDS on loopback, gives the shell
-# a ROS domain of its own, and puts the project's `ros2` on PATH where no real one exists.
+# Activates .venv, sources the colcon install space (which puts the project's `ros2`,
+# package ros2cli_lite, on PATH where no real ROS 2 is sourced), keeps DDS on loopback and
+# gives the shell a ROS domain of its own.
 # Run scripts/setup.sh first.
 
 _uav_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -32,9 +33,5 @@ export FASTRTPS_DEFAULT_PROFILES_FILE="${FASTRTPS_DEFAULT_PROFILES_FILE:-$_uav_r
 if [ -z "${ROS_DOMAIN_ID:-}" ]; then
     ROS_DOMAIN_ID=$(( $(printf '%s' "$_uav_root" | cksum | cut -d' ' -f1) % 90 + 1 ))
     export ROS_DOMAIN_ID
-fi
-
-if ! command -v ros2 >/dev/null 2>&1; then
-    export PATH="$_uav_root/tools/bin:$PATH"
 fi
 unset _uav_root _uav_nounset

@@ -102,7 +102,8 @@ build_workspace() {
         source "$venv/bin/activate"
         local skip=()
         if use_system_ros; then
-            skip=(--packages-skip tf2_msgs)  # a real Jazzy has its own: never shadow it
+            # a real Jazzy has its own of both: never shadow them
+            skip=(--packages-skip tf2_msgs ros2cli_lite)
         else
             export CMAKE_PREFIX_PATH="$venv" AMENT_PREFIX_PATH="$venv"
         fi

@@ -32,6 +32,8 @@ from uav_fault_estimator.campaigns import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
+from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
 from uav_fault_estimator.offline import fly_on_grid_each
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
@@ -42,7 +44,6 @@ from studies.airspeed_study import (
     at_airspeed,
     compared_calibrations,
     fault_free_at,
-    first_combined_alarm_s,
     rates_per_group,
 )
 
@@ -85,7 +86,8 @@ def main() -> int:
                                                 TEST_FLIGHTS_PER_AIRSPEED, p_fa), strict=True)}
         delays = {}
         for airspeed, flight in zip(FAULT_AIRSPEEDS_MPS, fault_flights, strict=True):
-            alarm_s = first_combined_alarm_s(calibration, flight, p_fa, fault_start_s)
+            alarm_s = first_combined_alarm_s(run_detector(calibration, flight, p_fa),
+                                             fault_start_s)
             delays[f"{airspeed:g}"] = None if alarm_s is None else alarm_s - fault_start_s
         results[name] = {
             "false_alarm_rates": per_airspeed, "aileron_loss_delay_s": delays,

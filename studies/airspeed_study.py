@@ -2,7 +2,7 @@
 flights at several airspeeds calibrate it, with and without the schedule; flights at
 airspeeds the calibration did not see give each test's false-alarm rate, and a seeded
 aileron loss its detection delay. Shared by studies/airspeed_schedule.py and
-tests/detector/test_airspeed_schedule.py. No ROS here."""
+tests/studies/test_airspeed_study.py. No ROS here."""
 
 from __future__ import annotations
 
@@ -61,14 +61,6 @@ def mean_rates(calibration: Calibration, flights: Sequence[DetectorFlight],
     """Each test's false-alarm rate (rates()) averaged over the flights."""
     measured = [rates(calibration, flight, false_alarm_probability) for flight in flights]
     return {test: float(np.mean([m[test] for m in measured])) for test in TESTS}
-
-
-def first_combined_alarm_s(calibration: Calibration, flight: DetectorFlight,
-                           false_alarm_probability: float, after_s: float) -> float | None:
-    """Time of the first combined alarm at or after after_s [s]; None if there is none."""
-    return next((sample.time_s for sample in
-                 run_detector(calibration, flight, false_alarm_probability)
-                 if sample.combined_alarm and sample.time_s >= after_s), None)
 
 
 def calibrated(flights: Sequence[DetectorFlight], detector_parameters: dict,

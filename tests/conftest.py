@@ -14,8 +14,8 @@ import helpers
 import pytest
 import yaml
 from helpers.flights import fly
-from helpers.ros_graph import RosGraph
 from helpers.started_processes import started_processes
+from uav_common.ros.graph_probe import RosGraph
 from uav_common.ros_processes import reserve_domain_id
 from uav_fault_estimator.campaigns import Campaign, CampaignOptions
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario

@@ -15,9 +15,8 @@ from uav_fault_estimator.estimation.fault_models import Monotonic
 from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
 from uav_fault_estimator.estimation.monotone_active_set import MonotoneActiveSet
 from uav_fault_estimator.estimation.qp_problem import WindowQP, stage_normal_equations
+from uav_fault_estimator.estimation.reference_solution import solve_reference
 from uav_fault_estimator.estimation.solve_status import SolveStatus
-
-from benchmarks.qp_solvers import solve_reference
 
 BOUNDS = {"lower_and_upper": (0.0, 6.0), "lower": (0.0, math.inf), "none": (-math.inf, math.inf)}
 
@@ -69,7 +68,7 @@ def test_active_set_solution_satisfies_kkt_exactly_and_is_clarabels(bounds):
         assert max(kkt) <= 1e-9 * problem.objective_scale()
         least = objective(problem, reference)
         assert objective(problem, solution.x) <= least + 1e-10 * abs(least)
-        assert deviation <= 1e-5  # the reference's own accuracy (benchmarks/qp_solvers.py)
+        assert deviation <= 1e-5  # the reference's own accuracy (estimation/reference_solution.py)
 
 
 @pytest.mark.timeout(60)

@@ -16,9 +16,8 @@ from uav_fault_estimator.estimation.fault_models import (
 )
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP, stage_normal_equations
+from uav_fault_estimator.estimation.reference_solution import solve_reference
 from uav_fault_estimator.estimation.solve_status import SolveStatus
-
-from benchmarks.qp_solvers import solve_reference
 
 TIGHT = SolverSettings(eps_abs=1e-9, eps_rel=0.0, max_iter=10_000)
 FREE = (-math.inf, math.inf)

@@ -11,13 +11,13 @@ from helpers import simulated_logs
 from uav_common.package_data import default_parameters
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
+from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
-
-from studies.airspeed_study import first_combined_alarm_s
 
 NODE = default_parameters("uav_fault_estimator", "detector_node.yaml")
 ONSET_S = 60.0
@@ -35,10 +35,12 @@ def test_the_logs_give_the_direct_runs_detection_delay(tmp_path):
     calibration = load_calibration("", NODE["window"], NODE["forgetting_factor"])
     airframe = load_airframe(simulated_logs.FIXTURE_AIRFRAME)
     p_fa = NODE["false_alarm_probability"]
-    delays = {"direct": first_combined_alarm_s(calibration, truth.grid, p_fa, ONSET_S)}
+    delays = {"direct": first_combined_alarm_s(
+        run_detector(calibration, truth.grid, p_fa), ONSET_S)}
     for name in ("flight.ulg", "flight.bag"):
         inputs = detector_samples(read_log(tmp_path / name), airframe, DEFAULT_SAMPLE_PERIOD_S)
-        delays[name] = first_combined_alarm_s(calibration, inputs.flight, p_fa, ONSET_S)
+        delays[name] = first_combined_alarm_s(
+            run_detector(calibration, inputs.flight, p_fa), ONSET_S)
     print("first combined alarm after the onset [s]:", delays)
     assert delays["direct"] is not None and delays["direct"] - ONSET_S <= 10.0
     for name in ("flight.ulg", "flight.bag"):

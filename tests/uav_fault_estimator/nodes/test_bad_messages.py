@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from helpers.diagnostics import latest_status, latest_values
-from helpers.flight_replay import FlightSample, Replayer, simulated_flight
-from helpers.flight_replay import message as simulated_message
 from uav_common.channels import STATE_CHANNELS
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import FaultAlarm, FaultEstimate, Residuals
+from uav_sim.flight_replay import FlightSample, Replayer, simulated_flight
+from uav_sim.flight_replay import message as simulated_message
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 pytestmark = pytest.mark.integration

@@ -1,5 +1,6 @@
 """The one interface every window-QP solver meets: the estimator's (ProxSuite, the active
-set) and the benchmark's reference and comparison solvers (benchmarks/qp_solvers.py).
+set), the reference (reference_solution.py: Clarabel, polished) and the benchmark's
+comparison solvers (benchmarks/qp_solvers.py).
 
 A solver is built on a WindowQP and, at each call, solves it for the problem's current H
 and g from a warm start: the previous window's primal x0 (n,), equality multipliers y0 and

@@ -89,10 +89,11 @@ def alarm_intervals(samples: Sequence[DetectorSample], channels: Sequence[str],
                                             TESTS.index(i.test)))
 
 
-def first_combined_alarm_s(samples: Sequence[DetectorSample]) -> float | None:
-    """The time [s] of the first combined alarm; None without one."""
+def first_combined_alarm_s(samples: Sequence[DetectorSample],
+                           after_s: float = -math.inf) -> float | None:
+    """The time [s] of the first combined alarm at or after after_s [s]; None without one."""
     return next((round(sample.time_s, TIME_DECIMALS) for sample in samples
-                 if sample.combined_alarm), None)
+                 if sample.combined_alarm and sample.time_s >= after_s), None)
 
 
 def log_summary(name: str, source: str, samples: Sequence[DetectorSample],

@@ -18,7 +18,7 @@ from uav_common.ros_processes import wait_until
 
 pytestmark = pytest.mark.integration
 
-CLOCK_PUBLISHER = [sys.executable, "tests/tools/clock_publisher.py"]
+CLOCK_PUBLISHER = [sys.executable, "tests/ros2cli_lite/clock_publisher.py"]
 
 
 # ----------------------------------------------------------------------- node info

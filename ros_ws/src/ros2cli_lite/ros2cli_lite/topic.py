@@ -10,7 +10,8 @@ from collections.abc import Callable
 from typing import Any
 
 import yaml
-from ros2cli_graph import (
+
+from ros2cli_lite.graph import (
     GRAPH_POLL_S,
     absolute_name,
     add_spin_time,
@@ -24,7 +25,7 @@ from ros2cli_graph import (
     topic_types,
     wait_for_topic_type,
 )
-from ros2cli_render import (
+from ros2cli_lite.render import (
     DEFAULT_TRUNCATE_LENGTH,
     BandwidthWindow,
     CliError,

@@ -13,14 +13,15 @@ import sys
 from typing import Any
 
 import yaml
-from ros2cli_graph import (
+
+from ros2cli_lite.graph import (
     add_spin_time,
     graph_node,
     node_names,
     service_names,
     settle_graph,
 )
-from ros2cli_render import CliError
+from ros2cli_lite.render import CliError
 
 SERVICE_WAIT_S = 5.0
 CALL_TIMEOUT_S = 10.0

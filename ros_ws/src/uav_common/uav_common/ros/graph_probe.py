@@ -1,5 +1,6 @@
-"""An rclpy node of its own inside a process (a test, a benchmark): topic discovery,
-message collection and publishing, in a context of its own."""
+"""A hidden rclpy node inside a process that is not a node (a test, a benchmark, a tool):
+topic discovery, message collection and publishing, in an rclpy context of its own, and
+waits on a condition of the graph (a topic seen, endpoints matched) instead of a sleep."""
 
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ class Waited:
 
 
 class RosGraph:
-    """A hidden node on the session's domain: topic discovery and message collection."""
+    """A hidden node on the process's ROS domain: topic discovery and message collection."""
 
     def __init__(self) -> None:
         import rclpy
@@ -37,7 +38,7 @@ class RosGraph:
         self.context = rclpy.Context()
         rclpy.init(context=self.context)
         self.node = rclpy.create_node(
-            "_test_graph",
+            "_graph_probe",
             context=self.context,
             start_parameter_services=False,
             enable_rosout=False,

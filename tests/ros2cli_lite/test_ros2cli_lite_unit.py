@@ -1,17 +1,11 @@
 """Formatting and parsing of the project's `ros2` command, without a ROS graph."""
 
-import sys
-
 import pytest
 import yaml
-from helpers.repo import REPO_ROOT
-
-sys.path.insert(0, str(REPO_ROOT / "tools"))
-
-from ros2cli_interface import interface_lines, without_comment
-from ros2cli_lite import CliError, field_value, format_document, parser
-from ros2cli_param import dump_text, get_line
-from ros2cli_render import (
+from ros2cli_lite.cli import CliError, field_value, format_document, parser
+from ros2cli_lite.interface import interface_lines, without_comment
+from ros2cli_lite.param import dump_text, get_line
+from ros2cli_lite.render import (
     BandwidthWindow,
     RateWindow,
     format_bag_info,

@@ -22,9 +22,8 @@ what this project's users need, with ros2cli's (Jazzy) output and exit statuses:
     ros2 bag info BAG
 
 Errors end with one line on stderr and exit status 1. The pure parts (formatting) are in
-ros2cli_render.py, the graph queries in ros2cli_graph.py, the topic verbs in
-ros2cli_topic.py, the parameter verbs in ros2cli_param.py, the service verbs in
-ros2cli_service.py, the interface verbs in ros2cli_interface.py.
+render.py, the graph queries in graph.py, the topic verbs in topic.py, the parameter verbs
+in param.py, the service verbs in service.py, the interface verbs in interface.py.
 """
 
 from __future__ import annotations
@@ -35,11 +34,8 @@ import shlex
 import sys
 from collections.abc import Callable, Sequence
 
-import ros2cli_interface
-import ros2cli_param
-import ros2cli_service
-import ros2cli_topic
-from ros2cli_graph import (
+from ros2cli_lite import interface, param, service, topic
+from ros2cli_lite.graph import (
     absolute_name,
     add_spin_time,
     graph_node,
@@ -47,7 +43,7 @@ from ros2cli_graph import (
     node_names,
     settle_graph,
 )
-from ros2cli_render import (
+from ros2cli_lite.render import (
     CliError,
     bag_info,
     field_value,
@@ -213,11 +209,11 @@ def parser() -> argparse.ArgumentParser:
 
     for graph_query in (nodes, node_info_parser):
         add_spin_time(graph_query, DEFAULT_SPIN_TIME_S)
-    ros2cli_param.add_parsers(commands, DEFAULT_SPIN_TIME_S)
-    ros2cli_service.add_parsers(commands, DEFAULT_SPIN_TIME_S)
-    ros2cli_topic.add_parsers(commands, DEFAULT_SPIN_TIME_S)
+    param.add_parsers(commands, DEFAULT_SPIN_TIME_S)
+    service.add_parsers(commands, DEFAULT_SPIN_TIME_S)
+    topic.add_parsers(commands, DEFAULT_SPIN_TIME_S)
 
-    ros2cli_interface.add_parsers(commands)
+    interface.add_parsers(commands)
 
     bag = commands.add_parser("bag", help="inspect rosbag2 recordings")
     bag_info_parser = bag.add_subparsers(dest="verb", required=True).add_parser("info")

@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from ros2cli_render import CliError
+from ros2cli_lite.render import CliError
 
 KINDS = ("msg", "srv", "action")
 SECTIONS = {"msg": "Messages", "srv": "Services", "action": "Actions"}

@@ -12,7 +12,8 @@ import time
 from typing import Any
 
 import yaml
-from ros2cli_graph import (
+
+from ros2cli_lite.graph import (
     GRAPH_POLL_S,
     absolute_name,
     add_spin_time,
@@ -23,7 +24,7 @@ from ros2cli_graph import (
     settle_graph,
     spin_for,
 )
-from ros2cli_render import CliError, set_message_fields
+from ros2cli_lite.render import CliError, set_message_fields
 
 
 def service_class(type_name: str) -> Any:

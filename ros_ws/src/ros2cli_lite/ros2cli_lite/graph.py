@@ -1,4 +1,4 @@
-"""The ROS graph as the `ros2` command sees it (tools/ros2cli_lite.py): a hidden node,
+"""The ROS graph as the `ros2` command sees it (cli.py): a hidden node,
 spinning, discovery that settles, names, topic types and a matching QoS. rclpy is imported
 inside the functions, so that `ros2 --help` starts fast."""
 
@@ -135,7 +135,7 @@ def print_listing(entries: list, count: bool, show_types: bool) -> None:
 def print_types(kind: str, name: str, max_s: float) -> int:
     """`ros2 topic|service type NAME` (kind `topic` or `service`): the types one a line,
     once discovery has settled or the name has appeared; an error if it did not."""
-    from ros2cli_render import CliError
+    from ros2cli_lite.render import CliError
 
     with graph_node() as node:
         query = (node.get_topic_names_and_types if kind == "topic"

@@ -12,13 +12,13 @@ from typing import Any
 
 import numpy as np
 from rclpy.duration import Duration
+from uav_common.ros.graph_probe import RosGraph
 from uav_common.ros.messages import air_data_message, controls_message, state_message, wind_message
 from uav_common.ros.qos import STREAM_QOS
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, WindEstimate
+
 from uav_sim.scenario import Scenario
 from uav_sim.simulation import Simulation
-
-from .ros_graph import RosGraph
 
 TOPICS = {"state": AircraftState, "controls": ControlInputs, "wind/filtered": WindEstimate,
           "air_data": AirData}
