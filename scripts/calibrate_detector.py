@@ -1,19 +1,20 @@
 #!/usr/bin/env python3
 """Calibrate detector_node from fault-free flights (Blanke & Hansen, section II-III).
 
-    python scripts/calibrate_detector.py [--flights 12] [--bags BAG ...] [--out FILE]
+    python scripts/calibrate_detector.py [--vehicle aerosonde] [--flights 12] [--bags BAG ...]
+                                         [--out FILE]
 
-Flies the fault_free scenario (the default flight: turbulence from the wind, noisy sensors,
-air data) with other seeds and background winds of 5-6.25 m/s towards directions 360/N
-degrees apart, samples it every sample_period_s, and fits: the RLS's initial parameters and
-covariance, the parameters' fault-free mean and spread, and the Weibull distributions of the GLRT
-statistic (per channel) and of the largest parameter deviation (self_tuning.calibrate).
-Writes the YAML that detector_node reads (default: the package's
-config/detector_calibration.yaml); the window and forgetting factor are detector_node's
-defaults (config/detector_node.yaml), for which alone the calibration holds. Held-out
-flights for the false-alarm test use seeds from 201 (tests/detector). --bags calibrates from
-recordings of fault-free flights instead (recorder_node's or demo.sh's bag/ folders: their
-/state and /controls).
+Flies the vehicle's fault-free scenario (its default flight: turbulence from the wind, noisy
+sensors, air data) with other seeds and background winds of 20-25 % of its airspeed towards
+directions 360/N degrees apart, samples it every sample_period_s, and fits: the RLS's initial
+parameters and covariance, the parameters' fault-free mean and spread, and the Weibull
+distributions of the GLRT statistic (per channel) and of the largest parameter deviation
+(self_tuning.calibrate). Writes the YAML that detector_node reads (default: the vehicle
+folder's detector_calibration.yaml in this source tree); the window and forgetting factor are
+detector_node's defaults (config/detector_node.yaml), for which alone the calibration holds.
+Held-out flights for the false-alarm test use seeds from 201 (tests/detector). --bags
+calibrates from recordings of fault-free flights instead (recorder_node's or demo.sh's bag/
+folders: their /state and /controls).
 """
 
 from __future__ import annotations
@@ -32,7 +33,11 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S, DEFAULT_SETTLE_S
+from uav_fault_estimator.detection.calibration import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_SETTLE_S,
+    simulated_airframe,
+)
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
@@ -42,15 +47,16 @@ from uav_fault_estimator.offline import (
     fly_on_grid_each,
 )
 from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
+from uav_sim.vehicles import DEFAULT_VEHICLE, DETECTOR_CALIBRATION_FILE, vehicle_names
 
-PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
+AIRCRAFT = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_sim/aircraft"
 FIRST_SEED = 101
 
 
-def simulated(count: int, options: CampaignOptions) -> tuple[list, str]:
-    """count fault-free flights flown now, where options say, and the calibration file's
-    header saying which."""
-    scenarios = fault_free_flights(count, FIRST_SEED)
+def simulated(count: int, vehicle: str, options: CampaignOptions) -> tuple[list, str]:
+    """count fault-free flights of the vehicle flown now, where options say, and the
+    calibration file's header saying which."""
+    scenarios = fault_free_flights(count, FIRST_SEED, vehicle=vehicle)
     with Campaign(options) as campaign:
         flights = [flight.detector_flight for flight
                    in fly_on_grid_each(campaign, scenarios, DEFAULT_SAMPLE_PERIOD_S)]
@@ -71,27 +77,32 @@ def recorded(bags: list[Path]) -> tuple[list, str]:
 @exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE)
     parser.add_argument("--flights", type=int, default=12)
     parser.add_argument("--bags", type=Path, nargs="+",
                         help="recordings of fault-free flights to calibrate from, not flying")
-    parser.add_argument("--out", type=Path, default=PACKAGE / "config/detector_calibration.yaml")
+    parser.add_argument("--out", type=Path,
+                        help="default: the vehicle's folder in this source tree")
     parser.add_argument("--generators", type=generator_names, default=SURFACE_GENERATORS,
                         help="comma-separated (detection/generators.py; default roll,pitch,yaw)")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
+    out = arguments.out or AIRCRAFT / arguments.vehicle / DETECTOR_CALIBRATION_FILE
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     started = time.monotonic()
     try:
         flights, header = (recorded(arguments.bags) if arguments.bags
-                           else simulated(arguments.flights, campaign_options(arguments)))
+                           else simulated(arguments.flights, arguments.vehicle,
+                                          campaign_options(arguments)))
         calibration = calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
                                 node["window"], DEFAULT_SETTLE_S,
+                                airframe=simulated_airframe(arguments.vehicle),
                                 generators=arguments.generators)
     except (ValueError, FileNotFoundError) as error:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)
         return 1
     header += "# Valid for the sample period, forgetting factor and window below only.\n"
-    write_calibration(arguments.out, header, calibration_to_dict(calibration),
+    write_calibration(out, header, calibration_to_dict(calibration),
                       f"{len(flights)} flights", time.monotonic() - started)
     return 0
 

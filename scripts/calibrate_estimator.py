@@ -1,16 +1,16 @@
 #!/usr/bin/env python3
 """Calibrate the estimator's residual noise (Q) from fault-free flights, per sensor suite.
 
-    python scripts/calibrate_estimator.py [--flights 4] [--out FILE]
+    python scripts/calibrate_estimator.py [--vehicle aerosonde] [--flights 4] [--out FILE]
 
-Flies the fault_free scenario (the default flight in its turbulence from the wind, noisy
-sensors) with seeds from 301 and background winds of 5-6.25 m/s towards directions 360/N
-degrees apart, once with air data on board and once without (the paper's filtered wind
-only), through residual_node's residual generator with its default parameters, and writes
-each suite's per-channel variances and one-step correlations of the residuals
-(noise_model.py) to the YAML that mhe_node reads (default: the package's
-config/residual_noise.yaml). Other seeds than the detector's (101-112) and its held-out
-flights (201-212), and than the default scenario's 7 that the estimator is judged on.
+Flies the vehicle's fault-free scenario (its default flight in its turbulence from the wind,
+noisy sensors) with seeds from 301 and background winds of 20-25 % of its airspeed towards
+directions 360/N degrees apart, once with air data on board and once without (the paper's
+filtered wind only), through residual_node's residual generator with its default parameters,
+and writes each suite's per-channel variances and one-step correlations of the residuals
+(noise_model.py) to the YAML that mhe_node reads (default: the vehicle folder's
+residual_noise.yaml in this source tree). Other seeds than the detector's (101-112) and its
+held-out flights (201-212), and than the default scenario's 7 that the estimator is judged on.
 """
 
 from __future__ import annotations
@@ -28,32 +28,30 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.estimation.noise_model import (
-    AIR_DATA_ON_BOARD,
-    CALIBRATION_FILE,
-    SUITES,
-    fit_noise,
-)
+from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD, SUITES, fit_noise
 from uav_fault_estimator.offline import (
     describe_flights,
     fault_free_flights,
     fault_free_residuals,
 )
 from uav_sim.scenario import SensorSuite
+from uav_sim.vehicles import DEFAULT_VEHICLE, NOISE_FILE, vehicle_names
 
-PACKAGE = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_fault_estimator"
+AIRCRAFT = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_sim/aircraft"
 FIRST_SEED = 301
 
 
 @exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE)
     parser.add_argument("--flights", type=int, default=4)
-    parser.add_argument("--out", type=Path, default=PACKAGE / "config" / CALIBRATION_FILE)
+    parser.add_argument("--out", type=Path,
+                        help="default: the vehicle's folder in this source tree")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
-    base = fault_free_flights(arguments.flights, FIRST_SEED)
+    base = fault_free_flights(arguments.flights, FIRST_SEED, vehicle=arguments.vehicle)
     scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=AIR_DATA_ON_BOARD[suite]))
                  for suite in SUITES.values() for s in base]
     with Campaign(campaign_options(arguments)) as campaign:
@@ -64,7 +62,8 @@ def main() -> int:
     header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
               f"flights per sensor suite of\n# {describe_flights(base)}.\n"
               "# Valid for residual_node's default parameters.\n")
-    write_calibration(arguments.out, header, calibration.to_dict(), f"{count} flights per suite",
+    write_calibration(arguments.out or AIRCRAFT / arguments.vehicle / NOISE_FILE, header,
+                      calibration.to_dict(arguments.vehicle), f"{count} flights per suite",
                       time.monotonic() - started)
     return 0
 

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Calibrate the prediction model from recordings of fault-free flights.
 
-    python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--parameters A,B,...]
-        [--measured AIRCRAFT.yaml] [--strict]
+    python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--vehicle aerosonde]
+        [--parameters A,B,...] [--measured AIRCRAFT.yaml] [--strict]
 
 RECORDING: a rosbag2 folder (demo.sh's DIR/bag, bringup's or recorder_node's) with /state,
 /controls, /wind/filtered and, where the aircraft has them, /air_data of a flight with no
-fault. Identifies the model's parameters (default: model_parameters.DEFAULT_PARAMETERS; any
-aerodynamic coefficient of aerosonde.xml by name or all of them as `coefficients`,
+fault, flown by the vehicle. Identifies the model's parameters (default:
+model_parameters.DEFAULT_PARAMETERS; any aerodynamic coefficient of the vehicle's XML by name
+or all of them as `coefficients`,
 mass_scale, thrust_scale, inertia_{x,y,z}_scale, cg_{x,y,z}_cm, airspeed_scale,
 angle_of_attack_deg, sideslip_deg) so that the models fit the flights' accelerations
 (estimation/model_calibration.py), prints
@@ -57,6 +58,7 @@ from uav_fault_estimator.recording.project_bag import (
     sensor_flight_from_recording,
 )
 from uav_sim.flown_aircraft import NOMINAL
+from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 
 INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
 
@@ -66,6 +68,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING")
     parser.add_argument("--out", type=Path, required=True, metavar="MODEL.yaml")
+    parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE,
+                        help="the aircraft flown (default: %(default)s)")
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS),
                         help="comma-separated names (default: %(default)s)")
     parser.add_argument("--measured", type=Path, metavar="AIRCRAFT.yaml",
@@ -76,8 +80,10 @@ def main() -> int:
     arguments = parser.parse_args()
     started = time.monotonic()
     try:
-        names = parameter_list(arguments.parameters)
-        measured = load_measured_aircraft(arguments.measured) if arguments.measured else NOMINAL
+        vehicle = arguments.vehicle
+        names = parameter_list(arguments.parameters, load_vehicle(vehicle))
+        measured = (load_measured_aircraft(arguments.measured, vehicle) if arguments.measured
+                    else NOMINAL)
         typestore = project_typestore()
         flights = [sensor_flight_from_recording(bag, typestore) for bag in arguments.recordings]
     except (ValueError, RecordingError) as error:
@@ -85,12 +91,13 @@ def main() -> int:
         return 2
     minutes = sum(f.times_s[-1] - f.times_s[0] for f in flights) / 60.0
     print(f"{len(flights)} flights, {minutes:.1f} min; parameters {', '.join(names)}")
-    noise = load_noise_calibration()
+    noise = load_noise_calibration(vehicle=vehicle)
+    residual_parameters = {**default_parameters("uav_fault_estimator", "residual_node.yaml"),
+                           "vehicle": vehicle}
     try:
         with Campaign(campaign_options(arguments)) as campaign:
             calibration = calibrate(
-                flights, names, default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                noise,
+                flights, names, residual_parameters, noise,
                 map_flights=functools.partial(campaign.results, name="recorded flights"),
                 measured=measured)
     except CalibrationError as error:
@@ -110,11 +117,12 @@ def main() -> int:
         f.name for f in flights)
     write_calibration(noise_path, f"# Written by scripts/calibrate_model.py: residuals of the "
                       f"calibrated model ({arguments.out.name}) on\n# {sources}.\n",
-                      fit_noise(calibration.residuals).to_dict(), "the same flights",
+                      fit_noise(calibration.residuals).to_dict(vehicle), "the same flights",
                       time.monotonic() - started)
     write_calibration(arguments.out, f"# Written by scripts/calibrate_model.py from {sources}."
                       "\n# For residual_node's model_calibration_file.\n",
-                      calibration_dict(calibration, [f.name for f in flights], noise_path.name),
+                      calibration_dict(calibration, vehicle, [f.name for f in flights],
+                                       noise_path.name),
                       f"{len(flights)} flights", time.monotonic() - started)
     return 0
 

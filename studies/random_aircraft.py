@@ -53,6 +53,7 @@ from uav_fault_estimator.offline import fly_and_estimate, sensor_flight, wind_va
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_sim.scenario import Scenario, SetpointChange, default_scenario_path, load_scenario
+from uav_sim.vehicles import load_vehicle
 
 from studies.model_error import CALIBRATION_FLIGHTS
 
@@ -98,7 +99,7 @@ def drawn_aircraft(seed: int, index: int) -> FlownAircraft:
         cg_offset_m=tuple(float(v) for v in around(0.0, DRAW["cg_offset_m"], 3)),
         thrust_scale=float(around(1.0, DRAW["thrust_scale"])),
         coefficients=tuple((name, float(around(1.0, DRAW["coefficient"])))
-                           for name in coefficient_names()),
+                           for name in coefficient_names(load_vehicle())),
         sensor_bias=SensorBias(float(around(1.0, DRAW["airspeed_scale"])),
                                float(around(0.0, DRAW["vane_bias_deg"])),
                                float(around(0.0, DRAW["vane_bias_deg"]))))
@@ -253,7 +254,7 @@ def calibration_study_arguments(parser: argparse.ArgumentParser) -> argparse.Nam
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     try:
-        arguments.parameters = parameter_list(arguments.parameters)
+        arguments.parameters = parameter_list(arguments.parameters, load_vehicle())
     except ValueError as error:
         parser.error(str(error))
     return arguments

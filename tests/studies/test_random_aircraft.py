@@ -8,6 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 from uav_sim.flown_aircraft import NOMINAL, coefficient_names
+from uav_sim.vehicles import load_vehicle
 
 from studies.model_error import CALIBRATION_FLIGHTS
 from studies.random_aircraft import (
@@ -29,7 +30,7 @@ def test_each_aircraft_is_drawn_within_its_ranges_and_again_the_same():
         assert all(abs(v - 1.0) <= DRAW["inertia_scale"] for v in one.inertia_scale)
         assert all(abs(v) <= DRAW["cg_offset_m"] for v in one.cg_offset_m)
         assert abs(one.thrust_scale - 1.0) <= DRAW["thrust_scale"]
-        assert [name for name, _ in one.coefficients] == list(coefficient_names())
+        assert [name for name, _ in one.coefficients] == list(coefficient_names(load_vehicle()))
         assert all(abs(v - 1.0) <= DRAW["coefficient"] for _, v in one.coefficients)
         assert abs(one.sensor_bias.airspeed_scale - 1.0) <= DRAW["airspeed_scale"]
         assert abs(one.sensor_bias.angle_of_attack_deg) <= DRAW["vane_bias_deg"]

@@ -14,13 +14,16 @@ from uav_fault_estimator.node_graph import (
     node_ros_args,
     vehicle_namespaces,
 )
+from uav_sim.paths import scenarios_dir
 
 SIM_TIME = ["-p", "use_sim_time:=true"]
+VEHICLE = ["-p", "vehicle:=aerosonde"]  # the shipped scenarios' vehicle
+A, B = scenarios_dir() / "default.yaml", scenarios_dir() / "fault_free.yaml"
 
 
 @pytest.mark.timeout(10)
 def test_several_aircraft_start_last_first_each_simulator_last():
-    plan = live_plan([Path("a.yaml"), Path("b.yaml")], foxglove=True)
+    plan = live_plan([A, B], foxglove=True)
     assert [node.key for node in plan] == [
         *(f"uav2/{n}" for n in ("residual_node", "mhe_node", "detector_node",
                                 "standard_topics_node", "sim_node")),
@@ -29,10 +32,14 @@ def test_several_aircraft_start_last_first_each_simulator_last():
         "foxglove_node"]
     sims = {node.key: node.ros_args for node in plan if node.executable == "sim_node"}
     # the first aircraft's simulator publishes /clock; every other node follows it
-    assert sims["uav1/sim_node"] == ["-r", "__ns:=/uav1", "-p", "scenario:=a.yaml"]
-    assert sims["uav2/sim_node"] == ["-r", "__ns:=/uav2", *SIM_TIME, "-p", "scenario:=b.yaml"]
+    assert sims["uav1/sim_node"] == ["-r", "__ns:=/uav1", *VEHICLE, "-p", f"scenario:={A}"]
+    assert sims["uav2/sim_node"] == ["-r", "__ns:=/uav2", *VEHICLE, *SIM_TIME, "-p",
+                                     f"scenario:={B}"]
     assert all(node.ros_args[-2:] == SIM_TIME for node in plan
                if node.executable != "sim_node")
+    modelling = {"sim_node", "residual_node", "mhe_node", "detector_node"}
+    assert all((node.ros_args[2:4] == VEHICLE) == (node.executable in modelling)
+               for node in plan[:-1])
     assert plan[-1].ros_args == SIM_TIME  # the whole graph's: no namespace
 
 
@@ -41,17 +48,19 @@ def test_a_model_calibration_wires_residual_and_mhe_nodes_after_the_parameter_fi
     calibration = ModelCalibrationFiles(Path("/m.yaml"), Path("/n.yaml"))
     plan = {node.key: node.ros_args for node in live_plan(
         [], "/uav3", Path("/p.yaml"), calibration)}
-    assert plan["residual_node"] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", "-p",
-                                     "model_calibration_file:=/m.yaml", *SIM_TIME]
-    assert plan["mhe_node"][:6] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", "-p",
-                                    "noise_calibration_file:=/n.yaml"]
+    assert plan["residual_node"] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", *VEHICLE,
+                                     "-p", "model_calibration_file:=/m.yaml", *SIM_TIME]
+    assert plan["mhe_node"][:8] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", *VEHICLE,
+                                    "-p", "noise_calibration_file:=/n.yaml"]
     assert "model_calibration_file:=/m.yaml" not in plan["mhe_node"]
-    assert node_ros_args("detector_node", "", False, calibration) == SIM_TIME
+    assert node_ros_args("detector_node", "", False, calibration) == [*VEHICLE, *SIM_TIME]
 
 
 @pytest.mark.timeout(30)
-def test_the_plan_reads_back_in_a_shell_word_for_word():
-    spaced = Path("/runs/my flights/a b.yaml")
+def test_the_plan_reads_back_in_a_shell_word_for_word(tmp_path):
+    spaced = tmp_path / "my flights" / "a b.yaml"
+    spaced.parent.mkdir()
+    spaced.write_text(A.read_text())
     result = subprocess.run([sys.executable, "-m", "uav_fault_estimator.node_graph",
                              "--scenario", str(spaced)], capture_output=True, text=True,
                             check=True)
@@ -69,6 +78,17 @@ def test_one_namespace_for_several_aircraft_is_refused():
     with pytest.raises(ValueError, match="one aircraft"):
         vehicle_namespaces(2, "/uav7")
     result = subprocess.run([sys.executable, "-m", "uav_fault_estimator.node_graph", "--ns",
-                             "/x", "--scenario", "a", "--scenario", "b"],
+                             "/x", "--scenario", str(A), "--scenario", str(B)],
                             capture_output=True, text=True, check=False)
     assert result.returncode == 2 and result.stderr.count("\n") == 1
+
+
+@pytest.mark.timeout(30)
+def test_a_scenario_that_cannot_be_read_is_one_line(tmp_path):
+    missing = tmp_path / "missing.yaml"
+    result = subprocess.run([sys.executable, "-m", "uav_fault_estimator.node_graph",
+                             "--scenario", str(missing)], capture_output=True, text=True,
+                            check=False)
+    assert result.returncode == 2
+    assert result.stderr == f"node_graph: scenario {missing}: cannot read the file (No such " \
+                            "file or directory)\n"

@@ -13,17 +13,19 @@ from uav_sim.flown_aircraft import COEFFICIENT_PROPERTY, FlownAircraft, coeffici
 from uav_sim.propeller import Propeller
 from uav_sim.simulation import spin_up_engine
 from uav_sim.trim import trim_level_flight
+from uav_sim.vehicles import load_vehicle
 
 AIRSPEED_MPS = 25.0
+AEROSONDE = load_vehicle("aerosonde")
 
 
 @pytest.fixture(scope="module")
 def trimmed():
     """An executive trimmed at 25 m/s, 250 m, its engine running at the trim throttle."""
-    fdm = create_fdm()
+    fdm = create_fdm(AEROSONDE)
     fdm["ic/h-sl-ft"] = 250.0 / M_PER_FT
     fdm["fcs/mixture-cmd-norm"] = 1.0
-    trim = trim_level_flight(fdm, AIRSPEED_MPS, Propeller.from_aircraft())
+    trim = trim_level_flight(fdm, AIRSPEED_MPS, AEROSONDE, Propeller.from_vehicle(AEROSONDE))
     fdm.run_ic()
     spin_up_engine(fdm)
     return fdm, trim
@@ -150,10 +152,10 @@ def test_propulsion_loss_takes_its_share_of_the_thrust(trimmed):
 
 @pytest.mark.timeout(60)
 def test_a_flown_aircraft_differs_where_it_says_and_only_there():
-    """Mass, inertia and CG from an edited copy of aerosonde.xml; coefficients and thrust
+    """Mass, inertia and CG from an edited copy of the vehicle's XML; coefficients and thrust
     as scaled properties; every other coefficient the file's."""
-    nominal = create_fdm()
-    flown = create_fdm(aircraft=FlownAircraft(
+    nominal = create_fdm(AEROSONDE)
+    flown = create_fdm(AEROSONDE, aircraft=FlownAircraft(
         mass_scale=1.1, inertia_scale=(1.0, 1.2, 1.0), cg_offset_m=(0.01, 0.0, 0.0),
         thrust_scale=0.9, coefficients=(("CLalpha", 0.95), ("Cm0", 1.1))))
     for fdm in (nominal, flown):
@@ -165,8 +167,9 @@ def test_a_flown_aircraft_differs_where_it_says_and_only_there():
     assert flown["inertia/cg-x-in"] == pytest.approx(nominal["inertia/cg-x-in"] - 0.3937,
                                                      abs=1e-3)
     assert flown["propulsion/thrust-scale"] == 0.9
-    for name in coefficient_names():
+    for name in coefficient_names(AEROSONDE):
         prop = COEFFICIENT_PROPERTY.format(name=name)
         scale = {"CLalpha": 0.95, "Cm0": 1.1}.get(name, 1.0)
         assert flown[prop] == pytest.approx(scale * nominal[prop], rel=1e-12), name
-    assert len(coefficient_names()) == 31 and "CDinduced" in coefficient_names()
+    names = coefficient_names(AEROSONDE)
+    assert len(names) == 31 and "CDinduced" in names

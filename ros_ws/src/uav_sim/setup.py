@@ -1,4 +1,4 @@
-"""Build description of uav_sim: Python modules, aircraft data, scenarios, config."""
+"""Build description of uav_sim: Python modules, aircraft folders, scenarios, config."""
 
 from pathlib import Path
 
@@ -25,7 +25,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        *share_tree("jsbsim"),
+        *share_tree("aircraft"),
         *share_tree("scenarios"),
         *share_tree("config"),
     ],
@@ -33,7 +33,7 @@ setup(
     zip_safe=True,
     maintainer="UAV fault diagnostics maintainers",
     maintainer_email="maintainers@uav-fault-diagnostics.example.org",
-    description="Aerosonde UAV flight simulation on JSBSim with seeded faults.",
+    description="Fixed-wing UAV flight simulation on JSBSim with seeded faults.",
     license="Apache-2.0",
     entry_points={"console_scripts": [f"sim_node = {PACKAGE}.ros.sim_node:main"]},
 )

@@ -54,7 +54,7 @@ def test_the_shipped_calibration_is_what_the_command_makes(tmp_path):
     out = tmp_path / "calibration.yaml"
     subprocess.run([sys.executable, str(REPO_ROOT / "scripts/calibrate_detector.py"),
                     "--out", str(out)], check=True, timeout=170)
-    shipped = REPO_ROOT / "ros_ws/src/uav_fault_estimator/config/detector_calibration.yaml"
+    shipped = REPO_ROOT / "ros_ws/src/uav_sim/aircraft/aerosonde/detector_calibration.yaml"
     assert_same_numbers(yaml.safe_load(out.read_text()), yaml.safe_load(shipped.read_text()))
 
 

@@ -11,6 +11,7 @@ from uav_common.channels import PAPER_FAULT_NAMES
 from uav_fault_estimator.estimation.prediction import aircraft_predictor_factory
 from uav_fault_estimator.estimation.residuals import ResidualGenerator, ResidualSample
 from uav_sim.scenario import SeededFault, default_scenario_path, load_scenario
+from uav_sim.vehicles import load_vehicle
 
 # The default route in calm air for 90 s: 60 s straight, then the first turn.
 FLIGHT_S = 90.0
@@ -26,7 +27,7 @@ def residual_flight() -> ResidualFlight:
     """Residuals after the transient of a calm flight with faults [%] held from the start;
     with wind-error columns in S when wind_error_step_mps > 0."""
     base = calm(load_scenario(default_scenario_path()), FLIGHT_S)
-    factory = aircraft_predictor_factory()
+    factory = aircraft_predictor_factory(load_vehicle(base.vehicle))
     flown: dict[tuple, list[ResidualSample]] = {}
 
     def residuals(faults_pct: dict[str, float],

@@ -38,11 +38,13 @@ from uav_fault_estimator.recording.project_bag import (
 )
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
+from uav_sim.vehicles import load_vehicle
 
 # A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane, and its CG
 # 1.5 cm aft and 1 cm low, as measured on the ground
 TRUTH = {"CDmin": 8.0, "Cmalpha": 6.0, "angle_of_attack_deg": 0.4}
 MEASURED = FlownAircraft(cg_offset_m=(-0.015, 0.0, 0.01))
+AEROSONDE = load_vehicle("aerosonde")
 FLOWN = dataclasses.replace(MEASURED, coefficients=(("CDmin", 1.08), ("Cmalpha", 1.06)),
                             sensor_bias=SensorBias(angle_of_attack_deg=0.4))
 FLIGHT_S = 120.0  # the first leg and the first turn
@@ -78,17 +80,17 @@ def test_a_parameter_change_and_its_value_are_one_another():
 
 def test_an_unknown_parameter_is_named():
     with pytest.raises(ValueError, match="unknown model parameter 'CDwing'"):
-        model_parameter("CDwing")
+        model_parameter("CDwing", AEROSONDE)
     for name in DEFAULT_PARAMETERS:
-        model_parameter(name)
+        model_parameter(name, AEROSONDE)
 
 
 @pytest.mark.timeout(10)
 def test_a_parameter_list_names_every_coefficient_at_once():
-    names = parameter_list("coefficients, mass_scale")
-    assert names == (*coefficient_names(), "mass_scale")
+    names = parameter_list("coefficients, mass_scale", AEROSONDE)
+    assert names == (*coefficient_names(AEROSONDE), "mass_scale")
     with pytest.raises(ValueError, match="each parameter once"):
-        parameter_list("coefficients, CDmin")
+        parameter_list("coefficients, CDmin", AEROSONDE)
 
 
 @pytest.mark.timeout(120)
@@ -123,9 +125,9 @@ def test_the_calibration_file_gives_the_models_back(calibration, tmp_path):
     noise = tmp_path / "model.noise.yaml"
     noise.write_text("the noise file's existence is what is checked here\n")
     path = tmp_path / "model.yaml"
-    path.write_text(yaml.safe_dump(calibration_dict(calibration, ["one flight"], noise.name),
-                                   sort_keys=False))
-    loaded = load_model_calibration(path)
+    path.write_text(yaml.safe_dump(calibration_dict(calibration, "aerosonde", ["one flight"],
+                                                    noise.name), sort_keys=False))
+    loaded = load_model_calibration(path, "aerosonde")
     assert loaded.noise_file == noise
     assert loaded.aircraft.cg_offset_m == pytest.approx(MEASURED.cg_offset_m)
     assert dict(loaded.aircraft.coefficients) == pytest.approx(dict(
@@ -135,7 +137,8 @@ def test_the_calibration_file_gives_the_models_back(calibration, tmp_path):
 
 
 def write_calibration(path: Path, **changes) -> Path:
-    entries = {"model_file": "aerosonde.xml", "model_sha256": model_file_sha256(),
+    entries = {"vehicle": "aerosonde", "model_file": "aerosonde.xml",
+               "model_sha256": model_file_sha256(AEROSONDE),
                "aircraft": {"coefficients": {"CDmin": 1.1}}, **changes}
     path.write_text(yaml.safe_dump(entries))
     return path
@@ -144,6 +147,7 @@ def write_calibration(path: Path, **changes) -> Path:
 @pytest.mark.timeout(30)
 @pytest.mark.parametrize(("changes", "words"), [
     ({"model_sha256": "0" * 64}, "made for another model file"),
+    ({"vehicle": "another_aircraft"}, "made for the vehicle 'another_aircraft', not 'aerosonde'"),
     ({"aircraft": {"coefficients": {"CDwing": 1.1}}}, "unknown key 'aircraft.coefficients.CDwing'"),
     ({"aircraft": {"mass_scale": 3.0}}, "'aircraft.mass_scale'"),
     ({"noise_calibration_file": "nowhere.yaml"}, "does not exist"),
@@ -152,7 +156,7 @@ def write_calibration(path: Path, **changes) -> Path:
 def test_a_calibration_that_cannot_be_used_is_one_line(tmp_path, changes, words):
     path = write_calibration(tmp_path / "model.yaml", **changes)
     with pytest.raises(ModelCalibrationError) as raised:
-        load_model_calibration(path)
+        load_model_calibration(path, "aerosonde")
     message = str(raised.value)
     assert words in message and str(path) in message and "\n" not in message
 

@@ -51,3 +51,13 @@ def test_a_samples_own_noise_variances_weight_it():
         first = configured.update(y, s, None, np.array(q_other))
         second = other.update(y, s)
         np.testing.assert_allclose(first.fault_pct, second.fault_pct, atol=1e-9)
+
+
+def test_a_noise_file_of_another_vehicle_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "noise.yaml"
+    data = yaml.safe_load(shipped_noise_path().read_text())
+    path.write_text(yaml.safe_dump({**data, "vehicle": "another_aircraft"}))
+    with pytest.raises(ValueError) as refused:
+        load_noise_calibration(path, "aerosonde")
+    assert str(refused.value) == (f"noise calibration {path}: made for the vehicle "
+                                  "'another_aircraft', not 'aerosonde'")

@@ -13,6 +13,7 @@ from helpers.flights import column
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_fault_estimator.estimation.prediction import aircraft_predictor_factory
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
+from uav_sim.vehicles import load_vehicle
 
 LINEAR_X, LINEAR_Z, ANGULAR_X, ANGULAR_Z = 0, 2, 3, 5
 
@@ -95,4 +96,4 @@ def test_wind_error_columns_have_the_signs_of_the_physics(residual_flight):
 @pytest.mark.timeout(60)
 def test_an_unknown_fault_name_is_refused_by_name():
     with pytest.raises(ValueError, match="wing_fell_off"):
-        aircraft_predictor_factory()({"wing_fell_off": 5.0})
+        aircraft_predictor_factory(load_vehicle())({"wing_fell_off": 5.0})

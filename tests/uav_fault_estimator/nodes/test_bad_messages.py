@@ -161,7 +161,7 @@ def test_stray_stamps_are_dropped_and_change_nothing(graph, start_process):
                .message.startswith("no input"))
     status = latest_status(diagnostics, "/dirty/residual_node")
     assert status.level == DiagnosticStatus.WARN and status.message.startswith("no input")
-    assert status.hardware_id == "aerosonde/dirty"
+    assert status.hardware_id == "aircraft/dirty"
     assert health["stray_stamps"] == "9"  # three strays on each of the three required streams
 
 

@@ -112,7 +112,8 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
 def test_a_model_calibration_that_cannot_be_used_ends_bringup_before_any_node(tmp_path):
     """One line naming the file, status 2, and no node started (no log folder filled)."""
     calibration = tmp_path / "model.yaml"
-    calibration.write_text("model_file: aerosonde.xml\nmodel_sha256: '0'\naircraft: {}\n")
+    calibration.write_text("vehicle: aerosonde\nmodel_file: aerosonde.xml\nmodel_sha256: '0'\n"
+                           "aircraft: {}\n")
     logs = tmp_path / "logs"
     result = subprocess.run([str(BRINGUP), "--model-calibration", str(calibration), "--logs",
                              str(logs)], capture_output=True, text=True, timeout=100)

@@ -26,7 +26,7 @@ from uav_fault_estimator.demo_run import (
     Vehicle,
     prepare_output,
 )
-from uav_fault_estimator.estimation.model_file import SHIPPED_MODEL
+from uav_fault_estimator.estimation.model_file import shipped_model
 from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.recording.project_bag import project_typestore, read_topics
 from uav_fault_estimator.reporting import report
@@ -96,7 +96,7 @@ def check_metrics(out: Path) -> dict:
     assert isinstance(metrics["aircraft"]["flown"], dict)
     assert metrics["aircraft"]["guidance"] == "vector_field"  # the default guidance
     assert metrics["aircraft"]["guidance_fallbacks"] == 0
-    assert metrics["aircraft"]["model"] == SHIPPED_MODEL
+    assert metrics["aircraft"]["model"] == shipped_model("aerosonde")
     for name in FIGURES:
         assert (out / name).stat().st_size > 10_000, name
     for node in ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node"):
@@ -450,7 +450,8 @@ def test_a_process_ended_by_the_stops_sigint_is_no_failure(tmp_path) -> None:
 def test_a_model_calibration_that_cannot_be_used_ends_the_demo_before_any_node(tmp_path,
                                                                                 run_dir):
     calibration = tmp_path / "model.yaml"
-    calibration.write_text("model_file: aerosonde.xml\nmodel_sha256: '0'\naircraft: {}\n")
+    calibration.write_text("vehicle: aerosonde\nmodel_file: aerosonde.xml\nmodel_sha256: '0'\n"
+                           "aircraft: {}\n")
     result = subprocess.run([str(DEMO), "--out", str(run_dir), "--model-calibration",
                              str(calibration)], capture_output=True, text=True, timeout=100)
     lines = result.stderr.splitlines()

@@ -44,7 +44,8 @@ MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
              "model_fit_threshold_sigmas, model_fit_window_s, "
              "noise_calibration_file, noise_variance_factor, prior_pct, qos, solver_eps_abs, "
              "solver_max_iter, solver_method, state_file, update_budget_ms, upper_bounds_pct, "
-             "wait_for_subscribers, wind_error_handover_variance_m2ps2, wind_error_sigma_mps")
+             "vehicle, wait_for_subscribers, wind_error_handover_variance_m2ps2, "
+             "wind_error_sigma_mps")
 
 
 @pytest.mark.timeout(30)

@@ -118,7 +118,8 @@ def test_an_unknown_fault_name_ends_residual_node_with_one_message():
 @pytest.mark.timeout(60)
 def test_a_calibration_of_another_model_ends_residual_node_with_one_message(tmp_path):
     calibration = tmp_path / "model.yaml"
-    calibration.write_text(yaml.safe_dump({"model_file": "aerosonde.xml", "model_sha256": "0" * 64,
+    calibration.write_text(yaml.safe_dump({"vehicle": "aerosonde", "model_file": "aerosonde.xml",
+                                           "model_sha256": "0" * 64,
                                            "aircraft": {}}))
     result = subprocess.run(
         ros2_run_argv("uav_fault_estimator", "residual_node",

@@ -61,7 +61,8 @@ CONTROL_CHANNELS: tuple[str, ...] = (
 CONTROL_UNITS: tuple[str, ...] = ("rad", "rad", "rad", "rad", "", "", "")
 
 # Percent change of the named coefficient (docs/design.md); the first four are the paper's.
-FAULT_NAMES: tuple[str, ...] = (
+# What the estimator's model copies can carry.
+MODEL_FAULT_NAMES: tuple[str, ...] = (
     "right_wing_lift_loss",
     "right_wing_drag_increase",
     "left_wing_lift_loss",
@@ -70,6 +71,18 @@ FAULT_NAMES: tuple[str, ...] = (
     "pitch_moment",
     "aileron_effectiveness_loss",
 )
+# ALFA's failures: a surface's output pinned at the fault's position, or the engine cut;
+# seeded as 100 % while active (docs/design.md).
+STUCK_SURFACE_FAULT_NAMES: tuple[str, ...] = (
+    "aileron_stuck",
+    "left_aileron_stuck",
+    "right_aileron_stuck",
+    "elevator_stuck",
+    "rudder_stuck",
+)
+ACTUATOR_FAULT_NAMES: tuple[str, ...] = (*STUCK_SURFACE_FAULT_NAMES, "engine_cut")
+# Every fault a scenario can seed, in the order of the seeded fault vector.
+FAULT_NAMES: tuple[str, ...] = MODEL_FAULT_NAMES + ACTUATOR_FAULT_NAMES
 PAPER_FAULT_NAMES: tuple[str, ...] = FAULT_NAMES[:4]
 
 

@@ -1,4 +1,5 @@
-"""The Aerosonde's physical envelope: which measured values are possible at all (no ROS here).
+"""The physical envelope of the small aircraft this project flies: which measured values are
+possible at all (no ROS here).
 
 A value outside it (a stuck bit, a corrupted message, a unit mix-up) is not a fault of the
 aircraft but of the data, and is treated like a missing value: replaced by NaN, so that the

@@ -1,7 +1,7 @@
 """What every node says on /diagnostics that tools read back (report.py): the hardware id it
 names and the key of its CPU time. No ROS here."""
 
-AIRCRAFT = "aerosonde"  # the hardware every node diagnoses; its namespace names the vehicle
+AIRCRAFT = "aircraft"  # the hardware every node diagnoses; its namespace names which one
 CPU_KEY = "cpu_s"  # every status's value: the node's process CPU time so far [s]
 
 

@@ -1,1 +1,1 @@
-"""Fault diagnosis of the Aerosonde UAV (core modules import no rclpy)."""
+"""Fault diagnosis of fixed-wing UAVs (core modules import no rclpy)."""

@@ -59,6 +59,7 @@ from uav_common.ros_processes import (
     stop_all,
 )
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
+from uav_sim.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator import node_graph
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
@@ -212,8 +213,9 @@ class Demo:
         """Start a node, of a vehicle or of the run (None), wired as node_graph says (its
         namespace, the model calibration, /clock), with the demo's own ros_args."""
         name = vehicle.node_name(executable) if vehicle else executable
-        wiring = node_graph.node_ros_args(executable, vehicle.namespace if vehicle else "",
-                                          vehicle is self.vehicles[0], self.calibration)
+        wiring = node_graph.node_ros_args(
+            executable, vehicle.namespace if vehicle else "", vehicle is self.vehicles[0],
+            self.calibration, vehicle.scenario.vehicle if vehicle else DEFAULT_VEHICLE)
         process = RosProcess(ros2_run_argv(node_graph.PACKAGES[executable], executable,
                                            [*ros_args, *wiring]),
                              self.logs / f"{name}.log")
@@ -453,8 +455,9 @@ def main(runs_dir: Path) -> int:
         check_one_clock(scenarios)
         model_calibration = arguments.model_calibration and arguments.model_calibration.resolve()
         # refused here, before any process
-        noise_file = (load_model_calibration(model_calibration).noise_file
-                      if model_calibration else None)
+        noise_file = None
+        for flown in sorted({s.vehicle for s in scenarios}) if model_calibration else ():
+            noise_file = load_model_calibration(model_calibration, flown).noise_file
     except (ScenarioError, ModelCalibrationError) as error:
         print(f"demo: {' '.join(str(error).split())}", file=sys.stderr)  # one line
         return 2

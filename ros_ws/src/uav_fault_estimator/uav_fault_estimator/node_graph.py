@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from uav_common.ros_processes import SIM_TIME_ROS_ARGS
+from uav_sim.scenario import load_scenario
+from uav_sim.vehicles import DEFAULT_VEHICLE
 
 SIMULATOR = "sim_node"
 PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
@@ -31,6 +33,8 @@ PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
 # Each aircraft's nodes in start order: the simulator last, once the others listen.
 VEHICLE_NODES = ("residual_node", "mhe_node", "detector_node", "standard_topics_node",
                  SIMULATOR)
+# The nodes that model the aircraft: each takes its `vehicle` parameter from the scenario.
+MODELLING_NODES = ("residual_node", "mhe_node", "detector_node", SIMULATOR)
 
 
 def vehicle_namespaces(count: int, namespace: str = "") -> list[str]:
@@ -57,11 +61,15 @@ class ModelCalibrationFiles:
 
 
 def node_ros_args(executable: str, namespace: str, clock_leader: bool,
-                  calibration: ModelCalibrationFiles | None = None) -> list[str]:
+                  calibration: ModelCalibrationFiles | None = None,
+                  vehicle: str = DEFAULT_VEHICLE) -> list[str]:
     """The ROS arguments that wire one of an aircraft's nodes (or, namespace "", one of the
-    whole graph): its namespace, the model calibration's files, and /clock for every node
-    but the simulator that publishes it (clock_leader: the first aircraft's)."""
+    whole graph): its namespace, the vehicle it models, the model calibration's files, and
+    /clock for every node but the simulator that publishes it (clock_leader: the first
+    aircraft's)."""
     args = ["-r", f"__ns:={namespace}"] if namespace else []
+    if executable in MODELLING_NODES:
+        args += ["-p", f"vehicle:={vehicle}"]
     if calibration is not None and executable == "residual_node":
         args += ["-p", f"model_calibration_file:={calibration.model_file}"]
     if calibration is not None and calibration.noise_file and executable == "mhe_node":
@@ -91,19 +99,23 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
               foxglove: bool = False) -> list[PlannedNode]:
     """bringup.sh's nodes in start order: every aircraft's (the last aircraft's first, so
     that the followers wait for the clock the first one's simulator starts), each simulator
-    flying its scenario (none given: the shipped default, one aircraft), then foxglove_node
-    for the whole graph; params: a parameter file for every node."""
+    flying its scenario (none given: the shipped default, one aircraft) and each node
+    modelling the scenario's vehicle, then foxglove_node for the whole graph; params: a
+    parameter file for every node. ScenarioError (a ValueError) for a scenario that cannot
+    be read."""
     namespaces = vehicle_namespaces(max(len(scenarios), 1), namespace)
     common = ["--params-file", str(params)] if params else []
+    vehicles = [load_scenario(path).vehicle for path in scenarios] or [DEFAULT_VEHICLE]
     plan = []
     for index in reversed(range(len(namespaces))):
-        vehicle = namespaces[index]
+        namespace = namespaces[index]
         for executable in VEHICLE_NODES:
             # the parameter file first: what the graph sets overrides it (rcl: the last wins)
-            args = [*common, *node_ros_args(executable, vehicle, index == 0, calibration)]
+            args = [*common, *node_ros_args(executable, namespace, index == 0, calibration,
+                                            vehicles[index])]
             if executable == SIMULATOR and scenarios:
                 args += ["-p", f"scenario:={scenarios[index]}"]
-            key = node_key(vehicle if len(namespaces) > 1 else "", executable)
+            key = node_key(namespace if len(namespaces) > 1 else "", executable)
             plan.append(PlannedNode(key, PACKAGES[executable], executable, args))
     if foxglove:
         only = namespaces[0] if len(namespaces) == 1 else ""

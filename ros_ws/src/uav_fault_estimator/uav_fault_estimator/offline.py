@@ -1,7 +1,7 @@
 """The main job's chain without ROS: the core simulator, the residual generator and the
 moving-horizon estimator on one scenario, with the nodes' parameters (their config YAML
-unless given), every 0.5 s of simulation time as the nodes do. For tests, tuning and
-benchmarks; metrics.py turns the result into metrics.json's figures."""
+unless given; the scenario's vehicle), every 0.5 s of simulation time as the nodes do. For
+tests, tuning and benchmarks; metrics.py turns the result into metrics.json's figures."""
 
 from __future__ import annotations
 
@@ -16,8 +16,9 @@ from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
 from uav_common.package_data import default_parameters
 from uav_common.sample_grid import on_grid
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
-from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
+from uav_sim.scenario import Scenario, load_scenario
 from uav_sim.simulation import Simulation
+from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle
 
 from uav_fault_estimator.campaigns import Campaign
 from uav_fault_estimator.detection.detector import DetectorFlight
@@ -49,9 +50,9 @@ def fly_and_estimate(
     residual_node's model_calibration_file gives it.
     """
     residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
-                **(residual_overrides or {})}
-    mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), **scenario.estimator,
-           **(mhe_overrides or {})}
+                "vehicle": scenario.vehicle, **(residual_overrides or {})}
+    mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), "vehicle": scenario.vehicle,
+           **scenario.estimator, **(mhe_overrides or {})}
     sampler = residual_sampler(residual, model)
     step = EstimatorStep(mhe)
     simulation = Simulation(scenario)
@@ -153,7 +154,7 @@ def fault_free_residuals(scenario: Scenario) -> np.ndarray:
     parameters, on the update grid, where every row is valid. (y does not depend on S:
     the sensitivities' model copies are left out.)"""
     sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
-                                "fault_names": []})
+                                "vehicle": scenario.vehicle, "fault_names": []})
     simulation = Simulation(scenario)
     sample, rows = simulation.sample(), []
     while True:
@@ -185,12 +186,14 @@ def describe_flights(scenarios: Sequence[Scenario]) -> str:
             + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios))
 
 
-def fault_free_flights(count: int, first_seed: int,
-                       first_direction_deg: float = 0.0) -> list[Scenario]:
-    """count variants of the shipped fault_free scenario (the default flight in its own
-    turbulence and sensors): seeds from first_seed, background winds of 5.0-6.25 m/s (20-25 %
-    of airspeed) towards directions 360/count degrees apart from first_direction_deg. The
-    detector's calibration flights and, with other seeds, its held-out test flights."""
-    base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
+def fault_free_flights(count: int, first_seed: int, first_direction_deg: float = 0.0,
+                       vehicle: str = DEFAULT_VEHICLE) -> list[Scenario]:
+    """count variants of the vehicle's fault-free scenario (its default flight in its own
+    turbulence and sensors): seeds from first_seed, background winds of 20-25 % of its
+    airspeed (5.0-6.25 m/s at 25 m/s) towards directions 360/count degrees apart from
+    first_direction_deg. The detector's calibration flights and, with other seeds, its
+    held-out test flights."""
+    base = load_scenario(load_vehicle(vehicle).fault_free_scenario)
+    airspeed_mps = base.initial.airspeed_mps
     return [wind_variant(base, first_seed + i, first_direction_deg + 360.0 * i / count,
-                         5.0 + 0.25 * (i % 6)) for i in range(count)]
+                         airspeed_mps * (20 + i % 6) / 100) for i in range(count)]

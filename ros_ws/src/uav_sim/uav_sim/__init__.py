@@ -1,1 +1,2 @@
-"""Aerosonde UAV flight simulation on JSBSim with seeded faults (core modules import no rclpy)."""
+"""Fixed-wing UAV flight simulation on JSBSim with seeded faults, one folder per aircraft
+(core modules import no rclpy)."""

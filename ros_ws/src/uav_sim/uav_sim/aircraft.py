@@ -1,4 +1,4 @@
-"""The JSBSim Aerosonde: loading it, unit conversions and the properties the project uses.
+"""A vehicle in JSBSim: loading it, unit conversions and the properties the project uses.
 
 JSBSim works in feet, pounds and slugs; everything outside this module is SI.
 """
@@ -7,13 +7,19 @@ from __future__ import annotations
 
 import functools
 import os
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import jsbsim
 import numpy as np
+from uav_common.channels import STUCK_SURFACE_FAULT_NAMES
 
-from uav_sim.flown_aircraft import MODEL, NOMINAL, FlownAircraft, aircraft_folder, apply_to
-from uav_sim.paths import jsbsim_root
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, aircraft_folder, apply_to
 from uav_sim.propeller import PropellerForces
+
+if TYPE_CHECKING:
+    from uav_sim.scenario import SeededFault
+    from uav_sim.vehicles import Vehicle
 
 # 480 Hz: JSBSim's explicit propeller-speed update diverges at 120 Hz when the propeller
 # spins up (inertia 0.002 kg m^2 against 1.4 kW); 480 Hz is stable (measured).
@@ -26,12 +32,12 @@ KG_PER_LB = 0.45359237
 KG_PER_M3_PER_SLUG_PER_FT3 = 515.378818
 MPS_PER_KT = 1852.0 / 3600.0
 
-# Deflection of a control surface at command 1 (the FCS of aerosonde.xml); flap at 1: 20 deg.
-SURFACE_LIMIT_RAD = 0.5236
-FLAP_LIMIT_RAD = 0.3491
-
-# Fault properties: percent change of the named coefficient (docs/design.md).
+# Fault properties: percent change of the named coefficient, or 100 while an actuator fault
+# is active (docs/design.md); a stuck surface's output while it is [-1..1].
 FAULT_PROPERTY = "fault/{name}-pct"
+STUCK_POSITION_PROPERTY = "fault/{name}-position-norm"
+# The throttle the engine gets: the command, or 0 once an engine_cut pinned it (measured).
+THROTTLE_OUTPUT = "fcs/throttle-out-norm"
 # Propeller force and moment injected by the prediction model (aircraft XML).
 MODEL_THRUST_LBF = "external_reactions/propeller_model/magnitude"
 MODEL_MOMENT_LBFFT = "external_reactions/propeller_model/magnitude-lbsft"
@@ -52,17 +58,18 @@ BODY_ACCELERATIONS = (
 )
 
 
-def create_fdm(dt_s: float = JSBSIM_DT_S,
+def create_fdm(vehicle: Vehicle, dt_s: float = JSBSIM_DT_S,
                aircraft: FlownAircraft = NOMINAL) -> jsbsim.FGFDMExec:
-    """A silent JSBSim executive with the Aerosonde loaded, at time step dt_s [s]; as the
+    """A silent JSBSim executive with the vehicle loaded, at time step dt_s [s]; as the
     flown aircraft says where it differs (the prediction models keep the nominal one)."""
     os.environ.setdefault("JSBSIM_DEBUG", "0")  # no start-up banner on stdout
-    fdm = jsbsim.FGFDMExec(str(jsbsim_root()), None)
+    fdm = jsbsim.FGFDMExec(str(vehicle.folder), None)
     fdm.set_debug_level(0)
-    folder = aircraft_folder(aircraft)
+    folder = aircraft_folder(vehicle, aircraft)
     fdm.set_aircraft_path(str(folder))
-    if not fdm.load_model(MODEL):
-        raise RuntimeError(f"JSBSim could not load the aircraft '{MODEL}' from {folder}")
+    fdm.set_engine_path(str(vehicle.folder))  # its engine and propeller sit beside its XML
+    if not fdm.load_model(vehicle.name):
+        raise RuntimeError(f"JSBSim could not load the aircraft '{vehicle.name}' from {folder}")
     apply_to(fdm, aircraft)
     fdm.set_dt(dt_s)
     return fdm
@@ -72,6 +79,13 @@ def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
     """Seed faults [%] by name into the aircraft's fault properties."""
     for name, value_pct in faults_pct.items():
         fdm[fault_property(name)] = value_pct
+
+
+def set_stuck_positions(fdm: jsbsim.FGFDMExec, faults: Sequence[SeededFault]) -> None:
+    """Where each seeded stuck surface's output is pinned once its fault is active."""
+    for fault in faults:
+        if fault.name in STUCK_SURFACE_FAULT_NAMES:
+            fdm[STUCK_POSITION_PROPERTY.format(name=fault.name)] = fault.position
 
 
 @functools.cache

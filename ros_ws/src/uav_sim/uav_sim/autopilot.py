@@ -1,7 +1,8 @@
-"""Autopilot of the simulated Aerosonde: attitude inner loops, altitude and airspeed hold.
+"""Autopilot of the simulated aircraft: attitude inner loops, altitude and airspeed hold.
 
-Sign conventions are source C's (AeroSim Aerosonde): a positive elevator pitches nose
-down, a positive aileron rolls left, a positive rudder yaws left. Every loop starts from
+Sign conventions are the project's, which every vehicle's XML follows (docs/aircraft.md): a
+positive elevator pitches nose down, a positive aileron rolls left, a positive rudder yaws
+left. Every loop starts from
 the trim, so that straight and level flight needs no correction:
 
     theta_cmd = theta_trim + PI(h_cmd - h) - k_hdot hdot      altitude hold (PI, as the paper)
@@ -17,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uav_sim.aircraft import SURFACE_LIMIT_RAD
 from uav_sim.trim import Trim
 
 
@@ -29,20 +29,20 @@ def clamp(value: float, low: float, high: float) -> float:
 
 @dataclass(frozen=True)
 class AutopilotGains:
-    """Loop gains (SI, radians); tuned on the simulator, see tests/sim."""
+    """Loop gains and limits (SI, radians); each vehicle's in its vehicle.yaml."""
 
-    altitude_p_radpm: float = 0.015
-    altitude_i_radpms: float = 0.0015
-    climb_rate_d_radspm: float = 0.03
-    pitch_limit_rad: float = 0.26
-    pitch_p: float = 1.0
-    pitch_rate_d_s: float = 0.1
-    airspeed_p_permps: float = 0.12
-    airspeed_i_permps_s: float = 0.03
-    roll_p: float = 0.5
-    roll_rate_d_s: float = 0.02
-    roll_limit_rad: float = 0.52
-    sideslip_p: float = 0.5
+    altitude_p_radpm: float
+    altitude_i_radpms: float
+    climb_rate_d_radspm: float
+    pitch_limit_rad: float
+    pitch_p: float
+    pitch_rate_d_s: float
+    airspeed_p_permps: float
+    airspeed_i_permps_s: float
+    roll_p: float
+    roll_rate_d_s: float
+    roll_limit_rad: float
+    sideslip_p: float
 
 
 @dataclass(frozen=True)
@@ -94,10 +94,12 @@ class Autopilot:
         trim: Trim,
         altitude_cmd_m: float,
         airspeed_cmd_mps: float,
-        gains: AutopilotGains | None = None,
+        gains: AutopilotGains,
+        surface_limit_rad: float,
     ) -> None:
         self.trim = trim
-        self.gains = gains or AutopilotGains()
+        self.gains = gains
+        self.surface_limit_rad = surface_limit_rad
         self.altitude_cmd_m = altitude_cmd_m
         self.airspeed_cmd_mps = airspeed_cmd_mps
         g = self.gains
@@ -129,7 +131,7 @@ class Autopilot:
         roll_cmd_rad = clamp(roll_cmd_rad, -g.roll_limit_rad, g.roll_limit_rad)
         aileron_rad = g.roll_p * (state.roll_rad - roll_cmd_rad) + g.roll_rate_d_s * p
         rudder_rad = -g.sideslip_p * state.sideslip_rad
-        limit = SURFACE_LIMIT_RAD
+        limit = self.surface_limit_rad
         return SurfaceCommands(
             elevator_rad=clamp(elevator_rad, -limit, limit),
             aileron_rad=clamp(aileron_rad, -limit, limit),

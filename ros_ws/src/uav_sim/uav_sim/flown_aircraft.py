@@ -1,15 +1,15 @@
-"""The aircraft the simulator flies, where it differs from the Aerosonde the models evaluate.
+"""The aircraft the simulator flies, where it differs from the vehicle the models evaluate.
 
 A real aircraft differs from its model by a few percent: payload and fuel, drag from
 antennas and skin, lift slope, pitch stiffness, vane misalignment. A FlownAircraft says how
 (a scenario's `aircraft:` block): scales of the empty mass, the empty inertia (per axis),
-the thrust, and of any aerodynamic coefficient of aerosonde.xml by its name there
+the thrust, and of any aerodynamic coefficient of the vehicle's XML by its name there
 (`aero/coefficients/NAME`), an offset of the empty CG, and biases of the air-data sensors.
 Only the simulator flies it; the prediction models stay nominal.
 
 Coefficients and thrust are JSBSim properties, set on a loaded aircraft (apply_to). Mass,
 inertia and CG are read-only in JSBSim once loaded: an aircraft that changes them is
-loaded from an edited copy of aerosonde.xml (aircraft_folder), written once per process
+loaded from an edited copy of the vehicle's XML (aircraft_folder), written once per process
 and aircraft. No ROS here.
 """
 
@@ -21,18 +21,19 @@ import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.etree import ElementTree
 
 import jsbsim
 
-from uav_sim.paths import jsbsim_root
+if TYPE_CHECKING:
+    from uav_sim.vehicles import Vehicle
 
 COEFFICIENT_PROPERTY = "aero/coefficients/{name}"
 THRUST_SCALE_PROPERTY = "propulsion/thrust-scale"
 SCALE_RANGE = (0.5, 2.0)  # what a scale may be: a model this far off is another aircraft
 BIAS_LIMIT_DEG = 5.0  # the largest vane bias [deg]
-CG_OFFSET_LIMIT_M = 0.1  # the largest CG offset per axis [m] (chord 0.19 m)
-MODEL = "aerosonde"
+CG_OFFSET_LIMIT_M = 0.1  # the largest CG offset per axis [m] (a small UAV's chord: 0.2 m)
 DIAGNOSTIC_KEY = "flown_aircraft"  # sim_node's /diagnostics key: differences() as JSON
 
 
@@ -56,7 +57,7 @@ class FlownAircraft:
     mass_scale, inertia_scale (x, y, z): of the empty mass and its inertia (the product
     Jxz scales with sqrt(x z)); cg_offset_m (x, y, z): of the empty CG [m], body axes (x
     forward, y right, z down); thrust_scale: of the propeller's thrust; coefficients: NAME
-    -> scale of aerosonde.xml's `aero/coefficients/NAME` (coefficient_names()); sensor_bias.
+    -> scale of the vehicle XML's `aero/coefficients/NAME` (coefficient_names()); sensor_bias.
     """
 
     mass_scale: float = 1.0
@@ -98,18 +99,13 @@ class FlownAircraft:
 NOMINAL = FlownAircraft()
 
 
-def aircraft_file() -> Path:
-    """The shipped aerosonde.xml."""
-    return jsbsim_root() / "aircraft" / MODEL / f"{MODEL}.xml"
-
-
 @functools.cache
-def coefficient_names() -> tuple[str, ...]:
-    """The names of aerosonde.xml's coefficient properties, in the file's order: the one
+def coefficient_names(vehicle: Vehicle) -> tuple[str, ...]:
+    """The names of the vehicle XML's coefficient properties, in the file's order: the one
     home of the list."""
     prefix = COEFFICIENT_PROPERTY.format(name="")
     names = [element.text.strip()[len(prefix):]
-             for element in ElementTree.parse(aircraft_file()).iter("property")
+             for element in ElementTree.parse(vehicle.model_file).iter("property")
              if element.get("value") is not None and element.text.strip().startswith(prefix)]
     return tuple(names)
 
@@ -123,48 +119,50 @@ def apply_to(fdm: jsbsim.FGFDMExec, aircraft: FlownAircraft) -> None:
     fdm[THRUST_SCALE_PROPERTY] = aircraft.thrust_scale
 
 
-def aircraft_folder(aircraft: FlownAircraft) -> Path:
+def aircraft_folder(vehicle: Vehicle, aircraft: FlownAircraft) -> Path:
     """JSBSim's aircraft folder to load this aircraft from: the shipped one, or an edited
-    copy of aerosonde.xml with the aircraft's mass, inertia and CG."""
+    copy of the vehicle's XML with the aircraft's mass, inertia and CG."""
     if not aircraft.changes_mass_balance:
-        return jsbsim_root() / "aircraft"
-    return _edited_folder(aircraft.mass_scale, aircraft.inertia_scale, aircraft.cg_offset_m)
+        return vehicle.folder.parent
+    return _edited_folder(vehicle.model_file, aircraft.mass_scale, aircraft.inertia_scale,
+                          aircraft.cg_offset_m)
 
 
 @functools.cache
-def _edited_folder(mass_scale: float, inertia_scale: tuple[float, float, float],
+def _edited_folder(model_file: Path, mass_scale: float,
+                   inertia_scale: tuple[float, float, float],
                    cg_offset_m: tuple[float, float, float]) -> Path:
-    """A temporary aircraft folder whose aerosonde.xml has the empty mass, inertia and CG
-    changed (kept for the process's life)."""
-    text = aircraft_file().read_text()
+    """A temporary aircraft folder whose copy of model_file (`<vehicle>.xml` in its vehicle
+    folder) has the empty mass, inertia and CG changed (kept for the process's life)."""
+    text = model_file.read_text()
     x, y, z = inertia_scale
     for tag, scale in (("ixx", x), ("iyy", y), ("izz", z), ("ixz", math.sqrt(x * z)),
                        ("emptywt", mass_scale)):
-        text = _scaled_element(text, tag, scale)
-    # aerosonde.xml's structural frame: x aft, y right, z up; the offset is in body axes
+        text = _scaled_element(text, model_file, tag, scale)
+    # the XML's structural frame: x aft, y right, z up; the offset is in body axes
     north, east, down = cg_offset_m
     for axis, offset in (("x", -north), ("y", east), ("z", -down)):
-        text = _shifted_cg(text, axis, offset)
+        text = _shifted_cg(text, model_file, axis, offset)
     folder = Path(tempfile.mkdtemp(prefix="flown_aircraft_"))
-    (folder / MODEL).mkdir()
-    (folder / MODEL / f"{MODEL}.xml").write_text(text)
+    (folder / model_file.parent.name).mkdir()
+    (folder / model_file.parent.name / model_file.name).write_text(text)
     return folder
 
 
-def _scaled_element(text: str, tag: str, scale: float) -> str:
+def _scaled_element(text: str, model_file: Path, tag: str, scale: float) -> str:
     """The file with the number of its one <tag unit=...> NUMBER </tag> times scale."""
     pattern = re.compile(rf"(<{tag} unit=\"[^\"]+\">\s*)([-0-9.eE+]+)(\s*</{tag}>)")
     if len(pattern.findall(text)) != 1:
-        raise ValueError(f"{aircraft_file()}: expected one <{tag}>")
+        raise ValueError(f"{model_file}: expected one <{tag}>")
     return pattern.sub(lambda m: f"{m[1]}{float(m[2]) * float(scale)!r}{m[3]}", text)
 
 
-def _shifted_cg(text: str, axis: str, offset_m: float) -> str:
+def _shifted_cg(text: str, model_file: Path, axis: str, offset_m: float) -> str:
     """The file with its CG location's axis coordinate [m] moved by offset_m."""
     block = re.compile(r"(<location name=\"CG\" unit=\"M\">.*?</location>)", re.S)
     match = block.search(text)
     if match is None:
-        raise ValueError(f"{aircraft_file()}: no CG location in metres")
+        raise ValueError(f"{model_file}: no CG location in metres")
     moved = re.sub(rf"(<{axis}>\s*)([-0-9.eE+]+)(\s*</{axis}>)",
                    lambda m: f"{m[1]}{float(m[2]) + float(offset_m)!r}{m[3]}", match[1])
     return text[:match.start()] + moved + text[match.end():]

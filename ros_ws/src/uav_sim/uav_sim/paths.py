@@ -1,4 +1,4 @@
-"""Where the simulator's data lives: the Aerosonde's JSBSim files and the scenarios."""
+"""Where the simulator's data lives: the aircraft folders and the scenarios."""
 
 from pathlib import Path
 
@@ -7,9 +7,9 @@ from uav_common.package_data import share_dir
 PACKAGE = "uav_sim"
 
 
-def jsbsim_root() -> Path:
-    """JSBSim root folder with aircraft/, engine/ and systems/ of the Aerosonde."""
-    return share_dir(PACKAGE) / "jsbsim"
+def aircraft_dir() -> Path:
+    """The folder of the aircraft folders, one per vehicle (uav_sim.vehicles)."""
+    return share_dir(PACKAGE) / "aircraft"
 
 
 def scenarios_dir() -> Path:

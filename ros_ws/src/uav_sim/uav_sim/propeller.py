@@ -1,9 +1,10 @@
-"""The Aerosonde propeller as JSBSim's FGPropeller computes it, from the same XML tables.
+"""A vehicle's propeller as JSBSim's FGPropeller computes it, from the same XML tables.
 
 The prediction model and the trim need the propeller's force and moment for a given engine
 speed, but JSBSim's propeller speed is a read-only state of its own engine model. This
 module evaluates the equations of JSBSim's fixed-pitch propeller (jsbsim 1.3.3,
-FGPropeller::Calculate) on the tables of `engine/aerosonde_propeller.xml`:
+FGPropeller::Calculate) on the tables of the vehicle's propeller file, driven by its engine
+file's power source (JSBSim's electric engine: shaft power = effective throttle x power):
 
     J = V_axial / (n D),  T = C_T(J) rho n^2 D^4,  P_required = C_P(J) rho n^3 D^5,
     torque reaction  Q = -P_engine / omega,  gyroscopic moment  omega_body x (I_p omega e_x).
@@ -16,15 +17,13 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
-from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
 
-from uav_sim.paths import jsbsim_root
-
-PROPELLER_FILE = "engine/aerosonde_propeller.xml"
-ENGINE_FILE = "engine/aerosonde_engine.xml"
+if TYPE_CHECKING:
+    from uav_sim.vehicles import Vehicle
 
 
 def _table(root: ET.Element, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -53,11 +52,10 @@ class Propeller:
     max_power_w: float
 
     @classmethod
-    def from_aircraft(cls, root: Path | None = None) -> Propeller:
-        """Read the propeller and engine XML of the JSBSim Aerosonde."""
-        root = root or jsbsim_root()
-        propeller = ET.parse(root / PROPELLER_FILE).getroot()
-        engine = ET.parse(root / ENGINE_FILE).getroot()
+    def from_vehicle(cls, vehicle: Vehicle) -> Propeller:
+        """Read the vehicle's propeller and engine XML."""
+        propeller = ET.parse(vehicle.propeller_file).getroot()
+        engine = ET.parse(vehicle.engine_file).getroot()
         j_ct, ct = _table(propeller, "C_THRUST")
         j_cp, cp = _table(propeller, "C_POWER")
         if not np.array_equal(j_ct, j_cp):

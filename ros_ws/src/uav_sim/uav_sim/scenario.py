@@ -1,6 +1,7 @@
 """Scenario files (docs/design.md schema): load, check every key, and fail with one clear message.
 
-A scenario names the flight (start, waypoints, duration), the wind and turbulence, the
+A scenario names the flight (start, waypoints, duration), the vehicle flown and modelled
+(uav_sim.vehicles), the wind and turbulence, the
 sensors on board, how the flown aircraft differs from the model (uav_sim.flown_aircraft),
 the faults seeded into the aircraft and the sensor dropouts of the state and air-data
 streams. Loading is
@@ -15,7 +16,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from uav_common.channels import AIR_DATA_CHANNELS, DROPOUT_CHANNELS, FAULT_NAMES
+from uav_common.channels import (
+    ACTUATOR_FAULT_NAMES,
+    AIR_DATA_CHANNELS,
+    DROPOUT_CHANNELS,
+    FAULT_NAMES,
+    STUCK_SURFACE_FAULT_NAMES,
+)
 from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
 
 from uav_sim.flown_aircraft import (
@@ -29,6 +36,7 @@ from uav_sim.flown_aircraft import (
 )
 from uav_sim.mpc_guidance import MpcSettings
 from uav_sim.paths import scenarios_dir
+from uav_sim.vehicles import DEFAULT_VEHICLE, VehicleError, check_vehicle_name, load_vehicle
 
 # from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
 # the others: JSBSim's MIL-HDBK-1797 presets (uav_sim.wind).
@@ -96,12 +104,15 @@ class SensorSuite:
 
 @dataclass(frozen=True)
 class SeededFault:
-    """A fault ramping linearly from 0 at start_s to magnitude_pct at start_s + ramp_s."""
+    """A fault ramping linearly from 0 at start_s to magnitude_pct at start_s + ramp_s; for
+    an actuator fault (ACTUATOR_FAULT_NAMES) a step to 100 %, a stuck surface's output pinned
+    at position (-1..1, a command's scale) from start_s on."""
 
     name: str
     start_s: float
     ramp_s: float
     magnitude_pct: float
+    position: float = 0.0
 
     def value_pct(self, time_s: float) -> float:
         if time_s < self.start_s:
@@ -144,6 +155,7 @@ class Scenario:
     wind: Wind
     sensors: SensorSuite = SensorSuite()
     guidance: Guidance = Guidance()
+    vehicle: str = DEFAULT_VEHICLE
     aircraft: FlownAircraft = NOMINAL
     faults: tuple[SeededFault, ...] = ()
     sensor_dropouts: tuple[SensorDropout, ...] = ()
@@ -250,15 +262,16 @@ def _triple(reader: Reader, name: str, low: float, high: float) -> tuple[float, 
     return tuple(float(value) for value in values)
 
 
-def read_aircraft(reader: Reader) -> FlownAircraft:
-    """An `aircraft:` block (a scenario's flown aircraft, a model calibration's model),
-    strictly: unknown keys and names refused, scales and biases within their limits."""
+def read_aircraft(reader: Reader, vehicle: str) -> FlownAircraft:
+    """An `aircraft:` block (a scenario's flown aircraft, a model calibration's model) of the
+    named vehicle, strictly: unknown keys and coefficient names refused, scales and biases
+    within their limits."""
     reader.check_keys(set(), {"mass_scale", "inertia_scale", "cg_offset_m", "thrust_scale",
                               "coefficients", "sensor_bias"})
     data = reader.data
     coefficients = reader.child("coefficients") if "coefficients" in data else None
     if coefficients is not None:
-        coefficients.check_keys(set(), set(coefficient_names()))
+        coefficients.check_keys(set(), set(coefficient_names(load_vehicle(vehicle))))
     bias = reader.child("sensor_bias") if "sensor_bias" in data else None
     if bias is not None:
         bias.check_keys(set(), {"airspeed_scale", "angle_of_attack_deg", "sideslip_deg"})
@@ -285,6 +298,15 @@ def read_aircraft(reader: Reader) -> FlownAircraft:
     )
 
 
+def _vehicle(reader: Reader) -> str:
+    """The `vehicle` key: a shipped vehicle's name (uav_sim.vehicles)."""
+    try:
+        return check_vehicle_name(reader.text("vehicle"))
+    except VehicleError as error:
+        reader.fail(f"'vehicle': {error}")
+        raise  # fail() raises; for the type checker
+
+
 def _waypoints(reader: Reader) -> tuple[tuple[float, float], ...]:
     points = reader.items("waypoints_ne_m")
     if len(points) < 2:
@@ -304,7 +326,20 @@ def _waypoints(reader: Reader) -> tuple[tuple[float, float], ...]:
     return waypoints
 
 
+ACTUATOR_FAULT_PCT = 100.0  # an actuator fault's seeded value while active
+
+
 def _fault(reader: Reader) -> SeededFault:
+    """A `faults` entry: a model fault's ramp, or an actuator fault's start (and, for a stuck
+    surface, its position)."""
+    name = reader.choice("name", FAULT_NAMES) if "name" in reader.data else None
+    if name in ACTUATOR_FAULT_NAMES:
+        reader.check_keys({"name", "start_s"},
+                          {"position"} if name in STUCK_SURFACE_FAULT_NAMES else set())
+        return SeededFault(name=name, start_s=reader.number("start_s", minimum=0.0), ramp_s=0.0,
+                           magnitude_pct=ACTUATOR_FAULT_PCT,
+                           position=(reader.number("position", minimum=-1.0, maximum=1.0)
+                                     if "position" in reader.data else 0.0))
     reader.check_keys({"name", "start_s", "ramp_s", "magnitude_pct"})
     return SeededFault(
         name=reader.choice("name", FAULT_NAMES),
@@ -312,6 +347,18 @@ def _fault(reader: Reader) -> SeededFault:
         ramp_s=reader.number("ramp_s", minimum=0.0),
         magnitude_pct=reader.number("magnitude_pct"),
     )
+
+
+def _faults(reader: Reader) -> tuple[SeededFault, ...]:
+    """The `faults` list; an actuator fault at most once (one position per surface)."""
+    faults = tuple(_fault(reader.element("faults", index))
+                   for index in range(len(reader.items("faults"))))
+    names = [fault.name for fault in faults if fault.name in ACTUATOR_FAULT_NAMES]
+    for index, fault in enumerate(faults):
+        if fault.name in ACTUATOR_FAULT_NAMES and names.count(fault.name) > 1:
+            reader.fail(f"'faults[{index}].name': {fault.name} is seeded more than once (an "
+                        "actuator fault is one output pinned from its start on)")
+    return faults
 
 
 def _dropout(reader: Reader) -> SensorDropout:
@@ -347,8 +394,8 @@ def load_scenario(path: str | Path) -> Scenario:
     data = reader.data
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
-        {"sensors", "guidance", "aircraft", "faults", "sensor_dropouts", "setpoints",
-         "estimator"},
+        {"sensors", "guidance", "vehicle", "aircraft", "faults", "sensor_dropouts",
+         "setpoints", "estimator"},
     )
     if reader.text("name") in (".", "..") or any(c in data["name"] for c in "/\\\0"):
         # demo.sh's default output folder is runs/<name>/
@@ -361,6 +408,7 @@ def load_scenario(path: str | Path) -> Scenario:
     if not isinstance(estimator, dict):
         reader.fail("'estimator' must be a mapping of estimator parameters")
     sensors = _sensors(reader.child("sensors")) if "sensors" in data else SensorSuite()
+    vehicle = _vehicle(reader) if "vehicle" in data else DEFAULT_VEHICLE
     dropouts = tuple(
         _dropout(reader.element("sensor_dropouts", index))
         for index in range(len(reader.items("sensor_dropouts")))
@@ -378,11 +426,10 @@ def load_scenario(path: str | Path) -> Scenario:
         wind=_wind(reader.child("wind")),
         sensors=sensors,
         guidance=_guidance(reader.child("guidance")) if "guidance" in data else Guidance(),
-        aircraft=read_aircraft(reader.child("aircraft")) if "aircraft" in data else NOMINAL,
-        faults=tuple(
-            _fault(reader.element("faults", index))
-            for index in range(len(reader.items("faults")))
-        ),
+        vehicle=vehicle,
+        aircraft=(read_aircraft(reader.child("aircraft"), vehicle) if "aircraft" in data
+                  else NOMINAL),
+        faults=_faults(reader),
         sensor_dropouts=dropouts,
         setpoints=tuple(_setpoint(reader.element("setpoints", index))
                         for index in range(len(reader.items("setpoints")))),

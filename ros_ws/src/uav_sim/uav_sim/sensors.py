@@ -47,7 +47,7 @@ GYRO = ChannelNoise(white=0.0035 * math.sqrt(10.0) * DEG, bias=10.0 / 3600.0 * D
 # Sources: VectorNav VN-200 GNSS/INS datasheet (position 1.0 m horizontal, 1.5 m vertical,
 # velocity 0.05 m/s, pitch/roll 0.03 deg, heading 0.2 deg, all RMS; gyro as above); the
 # 60 s correlation of GNSS position errors is this model's choice, not a datasheet's. Fuel:
-# a capacitive probe's 2 % of the Aerosonde's 5 kg tank.
+# a capacitive probe's 2 % of a 5 kg tank.
 STATE_NOISE: dict[str, ChannelNoise] = {
     "latitude": GNSS_HORIZONTAL,
     "longitude": GNSS_HORIZONTAL,

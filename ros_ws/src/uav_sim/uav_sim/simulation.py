@@ -1,4 +1,4 @@
-"""The simulated flight: JSBSim Aerosonde, autopilot, guidance, wind and seeded faults.
+"""The simulated flight: a vehicle in JSBSim, autopilot, guidance, wind and seeded faults.
 
 `Simulation(scenario)` trims the aircraft at the scenario's start, then `step()` advances
 one sensor period and returns a `Sample`: the measured state, controls and air data (through
@@ -19,9 +19,10 @@ from uav_sim.aircraft import (
     JSBSIM_DT_S,
     KG_PER_LB,
     M_PER_FT,
-    SURFACE_LIMIT_RAD,
+    THROTTLE_OUTPUT,
     create_fdm,
     set_faults,
+    set_stuck_positions,
 )
 from uav_sim.autopilot import Autopilot, FlightState
 from uav_sim.frames import north_east_m
@@ -31,6 +32,7 @@ from uav_sim.propeller import Propeller
 from uav_sim.scenario import Scenario
 from uav_sim.sensors import SensorModel
 from uav_sim.trim import Trim, start_trimmed, trim_level_flight
+from uav_sim.vehicles import load_vehicle
 from uav_sim.wind import (
     FROM_WIND,
     FilteredWind,
@@ -104,14 +106,16 @@ class Simulation:
         self.steps_per_sample = steps
         self.period_s = steps * JSBSIM_DT_S
         self.sample_count = 0
-        self.fdm = create_fdm(aircraft=scenario.aircraft)
+        self.vehicle = load_vehicle(scenario.vehicle)
+        self.fdm = create_fdm(self.vehicle, aircraft=scenario.aircraft)
+        set_stuck_positions(self.fdm, scenario.faults)
         self.trim = self._start()
         # North-east origin: where the flight starts. The engine spin-up held the aircraft
         # fixed in inertial space while the earth turned (about 250 m east per second at 55 N).
         self.origin_rad = (self.fdm["position/lat-geod-rad"], self.fdm["position/long-gc-rad"])
         self.autopilot = Autopilot(
-            self.trim, scenario.initial.altitude_m, scenario.initial.airspeed_mps
-        )
+            self.trim, scenario.initial.altitude_m, scenario.initial.airspeed_mps,
+            self.vehicle.autopilot, self.vehicle.surface_limit_rad)
         self.guidance = (
             MpcGuidance(scenario.waypoints_ne_m, self.autopilot.gains.roll_limit_rad,
                         scenario.guidance.mpc)
@@ -141,7 +145,8 @@ class Simulation:
         fdm["ic/h-sl-ft"] = initial.altitude_m / M_PER_FT
         fdm["fcs/mixture-cmd-norm"] = 1.0
         fdm["fcs/ignition-cmd"] = 1.0
-        trim = trim_level_flight(fdm, initial.airspeed_mps, Propeller.from_aircraft())
+        trim = trim_level_flight(fdm, initial.airspeed_mps, self.vehicle,
+                                 Propeller.from_vehicle(self.vehicle))
         wind = self.scenario.wind
         start_trimmed(
             fdm,
@@ -217,9 +222,10 @@ class Simulation:
             self.scenario.commanded(self.time_s))
         commands = self.autopilot.update(state, roll_cmd_rad, dt_s)
         self._setpoints = np.array([commands.roll_cmd_rad, commands.pitch_cmd_rad, math.nan])
-        fdm["fcs/elevator-cmd-norm"] = commands.elevator_rad / SURFACE_LIMIT_RAD
-        fdm["fcs/aileron-cmd-norm"] = commands.aileron_rad / SURFACE_LIMIT_RAD
-        fdm["fcs/rudder-cmd-norm"] = commands.rudder_rad / SURFACE_LIMIT_RAD
+        limit = self.vehicle.surface_limit_rad
+        fdm["fcs/elevator-cmd-norm"] = commands.elevator_rad / limit
+        fdm["fcs/aileron-cmd-norm"] = commands.aileron_rad / limit
+        fdm["fcs/rudder-cmd-norm"] = commands.rudder_rad / limit
         fdm["fcs/throttle-cmd-norm"] = commands.throttle
 
     def _position_ne_m(self) -> np.ndarray:
@@ -253,7 +259,7 @@ class Simulation:
                 fdm["fcs/elevator-pos-rad"],
                 fdm["fcs/aileron-pos-rad"],
                 fdm["fcs/rudder-pos-rad"],
-                fdm["fcs/throttle-cmd-norm"],
+                fdm[THROTTLE_OUTPUT],
                 fdm["fcs/mixture-cmd-norm"],
                 fdm["fcs/ignition-cmd"],
             ]

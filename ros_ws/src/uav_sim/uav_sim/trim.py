@@ -1,6 +1,6 @@
-"""Straight and level trim of the Aerosonde on JSBSim's own force and moment model.
+"""Straight and level trim of a vehicle on JSBSim's own force and moment model.
 
-JSBSim's trim (`simulation/do_simple_trim`) fails on this aircraft: its engine speed does
+JSBSim's trim (`simulation/do_simple_trim`) fails on these aircraft: its engine speed does
 not respond to the throttle while JSBSim trims ("udot doesn't appear to be trimmable",
 measured on jsbsim 1.3.3). So the trim solves udot = wdot = qdot = 0 for angle of attack,
 elevator and throttle itself, evaluating JSBSim's accelerations with `run_ic()` and the
@@ -10,6 +10,7 @@ propeller at the speed where it absorbs the engine's power (uav_sim.propeller).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import jsbsim
 import numpy as np
@@ -20,12 +21,14 @@ from uav_sim.aircraft import (
     JSBSIM_ENGINE_ON,
     KG_PER_M3_PER_SLUG_PER_FT3,
     M_PER_FT,
-    SURFACE_LIMIT_RAD,
     apply_propeller_model,
     clear_propeller_model,
 )
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
+
+if TYPE_CHECKING:
+    from uav_sim.vehicles import Vehicle
 
 TRIM_TOLERANCE = 1e-4  # on udot, wdot [m/s^2] and qdot [rad/s^2]: 0.1 m of drift in 45 s
 
@@ -41,8 +44,10 @@ class Trim:
     residual_accelerations: np.ndarray  # udot [m/s^2], wdot [m/s^2], qdot [rad/s^2]
 
 
-def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, propeller: Propeller) -> Trim:
-    """Trim in calm air at the position and altitude already in fdm's ic/ properties.
+def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, vehicle: Vehicle,
+                      propeller: Propeller) -> Trim:
+    """Trim the vehicle loaded in fdm in calm air at the position and altitude already in
+    fdm's ic/ properties, starting from the vehicle's trim guess.
 
     The equilibrium is air-relative, so it holds in any steady uniform wind too (see
     `start_trimmed`). Leaves fdm's controls at the trim and the propeller model cleared.
@@ -62,7 +67,7 @@ def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, propeller: Pro
         alpha_rad, elevator_rad, throttle = x
         fdm["ic/alpha-rad"] = alpha_rad
         fdm["ic/theta-rad"] = alpha_rad
-        fdm["fcs/elevator-cmd-norm"] = elevator_rad / SURFACE_LIMIT_RAD
+        fdm["fcs/elevator-cmd-norm"] = elevator_rad / vehicle.surface_limit_rad
         fdm["fcs/throttle-cmd-norm"] = throttle
         fdm.run_ic()
         density = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
@@ -84,9 +89,10 @@ def trim_level_flight(fdm: jsbsim.FGFDMExec, airspeed_mps: float, propeller: Pro
 
     # Powell's hybrid method; JSBSim's alpha-dot from the previous evaluation leaves noise
     # of about 1e-7 in the accelerations, so the difference step is 1e-5.
-    solution = root(
-        accelerations, x0=np.array([0.05, 0.0, 0.5]), method="hybr", options={"eps": 1e-10}
-    )
+    guess = vehicle.trim_guess
+    solution = root(accelerations, x0=np.array([guess.alpha_rad, guess.elevator_rad,
+                                                guess.throttle]),
+                    method="hybr", options={"eps": 1e-10})
     residual = accelerations(solution.x)
     clear_propeller_model(fdm)
     fdm[JSBSIM_ENGINE_ON] = 1

@@ -15,7 +15,7 @@ the von Karman filters itself and the simulation drives JSBSim's gust properties
   T omega 1e-3..5e3 (T = L/V): within 0.4 dB there, -5/3 slope included.
 - Rotational gusts p, q, r: MIL-F-8785C's forms (p from the spanwise gradient of w, q and r
   from the along-path gradients of w and v), in body axes; they enter the aircraft's rate
-  derivatives through `atmosphere/gust-{p,q,r}-rad_sec` (aerosonde.xml).
+  derivatives through `atmosphere/gust-{p,q,r}-rad_sec` (every vehicle's XML).
 - Discretisation is exact for white noise through a linear system (Van Loan), and the state
   starts in its stationary distribution: no start-up transient, any step size.
 

@@ -22,7 +22,7 @@ from uav_sim.turbulence import VonKarmanTurbulence, milspec_scales
 TUSTIN = 4
 FROM_WIND = "from_wind"
 GUST_VELOCITY_FPS = tuple(f"atmosphere/gust-{axis}-fps" for axis in ("north", "east", "down"))
-GUST_RATE_RADPS = tuple(f"atmosphere/gust-{axis}-rad_sec" for axis in "pqr")  # aerosonde.xml
+GUST_RATE_RADPS = tuple(f"atmosphere/gust-{axis}-rad_sec" for axis in "pqr")  # each vehicle XML's
 WINGSPAN_FT = "metrics/bw-ft"
 
 

@@ -25,7 +25,7 @@ SILENT_INPUTS_S = 5.0
 
 class Diagnostics:
     """Publishes the node's latest health on /diagnostics once a second of wall time, with
-    the vehicle as hardware_id (`aerosonde`, or `aerosonde/uav1` in namespace /uav1) and,
+    the vehicle as hardware_id (`aircraft`, or `aircraft/uav1` in namespace /uav1) and,
     beside the node's own values, its process's CPU time so far (CPU_KEY): what the node
     costs, whatever else shares the cores.
 

@@ -17,14 +17,21 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from uav_sim.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator.detection.change_detection import Weibull
 
 DEFAULT_SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz: the grid of every calibration made here
 DEFAULT_SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
-# The airframe of the shipped calibration: the simulated Aerosonde
-# (config/airframes/aerosonde_sim.yaml); a calibration holds for its airframe only.
-SIMULATED_AIRFRAME = "aerosonde_sim"
+
+
+def simulated_airframe(vehicle: str = DEFAULT_VEHICLE) -> str:
+    """The airframe of a vehicle as the simulator flies it, which its shipped calibration
+    names; a calibration holds for its airframe only."""
+    return f"{vehicle}_sim"
+
+
+SIMULATED_AIRFRAME = simulated_airframe()
 # Least spread of the calibration flights' airspeeds (5th to 95th percentile) for an airspeed
 # schedule: over less, the slopes are not told from the noise.
 MIN_SCHEDULE_SPAN_MPS = 2.0

@@ -1,5 +1,5 @@
-"""The detector's calibration file: YAML of Calibration's fields (the layout of
-config/detector_calibration.yaml), written by scripts/calibrate_detector.py and read by
+"""The detector's calibration file: YAML of Calibration's fields (the layout of a vehicle
+folder's detector_calibration.yaml), written by scripts/calibrate_detector.py and read by
 detector_node, checked against the node's settings and the airframe flown. No ROS here."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import yaml
-from uav_common.package_data import config_path
+from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle
 
 from uav_fault_estimator.detection.calibration import (
     SIMULATED_AIRFRAME,
@@ -20,8 +20,6 @@ from uav_fault_estimator.detection.calibration import (
 )
 from uav_fault_estimator.detection.change_detection import Weibull
 from uav_fault_estimator.detection.generators import GENERATORS, checked_generators
-
-CALIBRATION_FILE = "detector_calibration.yaml"  # in the package's config/
 
 
 def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
@@ -78,13 +76,13 @@ def _weibull_dict(distribution: Weibull) -> dict[str, float]:
 
 
 
-def shipped_calibration_path() -> Path:
-    """The package's config/detector_calibration.yaml (scripts/calibrate_detector.py)."""
-    return config_path("uav_fault_estimator", CALIBRATION_FILE)
+def shipped_calibration_path(vehicle: str = DEFAULT_VEHICLE) -> Path:
+    """The vehicle's detector_calibration.yaml (scripts/calibrate_detector.py)."""
+    return load_vehicle(vehicle).detector_calibration_file
 
 
 def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibration:
-    """The calibration file (empty path: the shipped one), checked against the airframe
+    """The calibration file (empty path: the default vehicle's), checked against the airframe
     flown, with whatever window and forgetting factor it was made for (screening offline);
     ValueError with one line naming the file."""
     file = Path(path) if path else shipped_calibration_path()

@@ -162,7 +162,7 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("lateral_force", ("c_fy",), True, _lateral_force),
     Generator("propulsion", ("a_tg", "b_tn", "c_t"), False, _propulsion),
 )}
-# The paper's three: the simulated Aerosonde's shipped calibration.
+# The paper's three: what a vehicle's shipped calibration uses.
 SURFACE_GENERATORS = ("roll", "pitch", "yaw")
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from uav_common.channels import FAULT_NAMES, PAPER_FAULT_NAMES
+from uav_common.channels import MODEL_FAULT_NAMES, PAPER_FAULT_NAMES
 
 from uav_fault_estimator.estimation.fault_models import FaultModel, make_model
 from uav_fault_estimator.estimation.monotone_active_set import is_monotone
@@ -150,11 +150,12 @@ class EstimatorConfig:
 
 
 def noise_calibration(parameters: Mapping[str, Any]) -> NoiseCalibration:
-    """The noise calibration mhe_node's parameters name ("" for the shipped one)."""
+    """The noise calibration mhe_node's parameters name ("" for the shipped one of its
+    `vehicle`)."""
     if not parameters["noise_variance_factor"] > 0:
         raise ValueError(f"noise_variance_factor must be positive, got "
                          f"{parameters['noise_variance_factor']}")
-    return load_noise_calibration(parameters["noise_calibration_file"])
+    return load_noise_calibration(parameters["noise_calibration_file"], parameters["vehicle"])
 
 
 # The one scale parameter of each fault model [%/sample] that mhe_node's flat
@@ -175,10 +176,10 @@ def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> Esti
     columns are the faults, then the wind-estimate errors when estimate_wind_errors. Q is
     the noise calibration's for air data (per sample the node may pass another suite's)."""
     names = list(parameters["fault_names"])
-    unknown = [name for name in names if name not in FAULT_NAMES]
+    unknown = [name for name in names if name not in MODEL_FAULT_NAMES]
     if unknown or len(set(names)) != len(names) or not names:
         raise ValueError(f"fault_names {names}: each once, at least one, of "
-                         + ", ".join(FAULT_NAMES))
+                         + ", ".join(MODEL_FAULT_NAMES))
     per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
                  "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2",
                  "arrival_floor_variances_pct2")

@@ -28,8 +28,9 @@ from typing import Any
 
 import numpy as np
 from proxsuite import proxqp
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, aircraft_file
+from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
 from uav_sim.propeller import Propeller
+from uav_sim.vehicles import Vehicle, load_vehicle
 
 from uav_fault_estimator.estimation.model_parameters import (
     SCALE_STEP_PCT,
@@ -79,9 +80,10 @@ class FlightTerms:
     rows: int
 
 
-def model_file_sha256() -> str:
-    """The shipped aerosonde.xml's SHA-256: a calibration is valid for this file only."""
-    return hashlib.sha256(aircraft_file().read_bytes()).hexdigest()
+def model_file_sha256(vehicle: Vehicle) -> str:
+    """The SHA-256 of the vehicle's XML as shipped: a calibration is valid for this file
+    only."""
+    return hashlib.sha256(vehicle.model_file.read_bytes()).hexdigest()
 
 
 def residual_weights(noise: NoiseCalibration) -> np.ndarray:
@@ -93,10 +95,12 @@ def residual_weights(noise: NoiseCalibration) -> np.ndarray:
 
 def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str],
                  residual_parameters: Mapping[str, Any], weights: np.ndarray) -> FlightTerms:
-    """Run the flight through a residual generator whose models are `model` and whose columns
-    are the named parameters' sensitivities [residual unit per parameter unit]; its normal
-    equations on residual_node's update grid (rows valid and plausible only)."""
-    parameters = [model_parameter(name) for name in names]
+    """Run the flight through a residual generator whose models are `model` (of the vehicle
+    residual_parameters names) and whose columns are the named parameters' sensitivities
+    [residual unit per parameter unit]; its normal equations on residual_node's update grid
+    (rows valid and plausible only)."""
+    vehicle = load_vehicle(residual_parameters["vehicle"])
+    parameters = [model_parameter(name, vehicle) for name in names]
     generator = _generator(model, parameters, residual_parameters)
     n = len(parameters)
     gram, linear, chi_square, rows = np.zeros((n, n)), np.zeros(n), 0.0, 0
@@ -158,11 +162,12 @@ def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
                residual_parameters: Mapping[str, Any]) -> ResidualGenerator:
     """residual_node's generator with `model`'s copies, columns per parameter: a model copy
     moved by the parameter's step, or for an air-data bias the bias moved by it."""
-    propeller = Propeller.from_aircraft()
     p = residual_parameters
+    vehicle = load_vehicle(p["vehicle"])
+    propeller = Propeller.from_vehicle(vehicle)
     copies = [q.name for q in parameters if not q.is_bias]
     return ResidualGenerator(
-        lambda changes: AircraftPredictor({}, propeller, changed(model, changes)),
+        lambda changes: AircraftPredictor({}, vehicle, propeller, changed(model, changes)),
         copies, SCALE_STEP_PCT, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
         sensor_bias=model.sensor_bias,
         bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias})
@@ -219,8 +224,10 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
     map_flights(function, flights) runs a function on every flight (a process pool's map,
     or map); log receives one line per step. measured: the aircraft as measured on the
     ground (its mass properties weighed and swung, say): the fit starts from it, its prior
-    is about it, and every parameter not named keeps its value."""
-    parameters = [model_parameter(name) for name in names]
+    is about it, and every parameter not named keeps its value. The vehicle is
+    residual_parameters' (residual_node's `vehicle`)."""
+    vehicle = load_vehicle(residual_parameters["vehicle"])
+    parameters = [model_parameter(name, vehicle) for name in names]
     names = tuple(names)
     prior_inverse = np.diag([1.0 / p.prior_std**2 for p in parameters])
     lower = np.array([p.bounds[0] for p in parameters])

@@ -1,14 +1,15 @@
 """A model calibration file: what scripts/calibrate_model.py writes and residual_node reads.
 
-    model_file: aerosonde.xml
-    model_sha256: <hex>             # the aerosonde.xml it was made for: refused for any other
+    vehicle: <vehicle>              # the aircraft it was made for: refused for any other
+    model_file: <vehicle>.xml
+    model_sha256: <hex>             # the vehicle XML it was made for: refused for any other
     aircraft: {...}                 # as a scenario's aircraft block: what the models load
     noise_calibration_file: NAME    # optional: mhe_node's noise from the same flights
     parameters: {NAME: {unit, value, prior, prior_std, posterior_std}}   # what was found
     worst_correlations: [...]       # what the flights could not separate
     fit: {...}                      # steps, reduced chi-square, flights
 
-Only model_sha256, aircraft and noise_calibration_file are used; the rest says how the
+Only vehicle, model_sha256, aircraft and noise_calibration_file are used; the rest says how the
 calibration came about. No ROS here.
 """
 
@@ -18,8 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from uav_common.strict_yaml import FileKind, load_yaml
-from uav_sim.flown_aircraft import FlownAircraft, aircraft_file
+from uav_sim.flown_aircraft import FlownAircraft
 from uav_sim.scenario import read_aircraft
+from uav_sim.vehicles import load_vehicle
 
 from uav_fault_estimator.estimation.model_calibration import (
     ModelCalibration,
@@ -27,7 +29,11 @@ from uav_fault_estimator.estimation.model_calibration import (
 )
 
 MODEL_KEY = "model"  # residual_node's /diagnostics key: its calibration file, or the shipped model
-SHIPPED_MODEL = "aerosonde.xml as shipped"
+
+
+def shipped_model(vehicle: str) -> str:
+    """What residual_node's copies load without a model calibration, in words."""
+    return f"{load_vehicle(vehicle).model_file.name} as shipped"
 
 
 class ModelCalibrationError(ValueError):
@@ -42,13 +48,13 @@ MEASURED_AIRCRAFT_FILE = FileKind("measured aircraft", ModelCalibrationError, 64
                                   "an aircraft block is a few hundred bytes")
 
 
-def load_measured_aircraft(path: str | Path) -> FlownAircraft:
-    """What was measured of the aircraft on the ground (`aircraft:` as a scenario's block,
+def load_measured_aircraft(path: str | Path, vehicle: str) -> FlownAircraft:
+    """What was measured of the vehicle on the ground (`aircraft:` as a scenario's block,
     for instance its cg_offset_m from a balance and inertia_scale from a pendulum); a
     ModelCalibrationError (one line) when it cannot be read or is malformed."""
     reader = load_yaml(MEASURED_AIRCRAFT_FILE, Path(path))
     reader.check_keys({"aircraft"})
-    return read_aircraft(reader.child("aircraft"))
+    return read_aircraft(reader.child("aircraft"), vehicle)
 
 
 @dataclass(frozen=True)
@@ -60,12 +66,14 @@ class CalibratedModel:
     noise_file: Path | None
 
 
-def calibration_dict(calibration: ModelCalibration, flights: list[str],
+def calibration_dict(calibration: ModelCalibration, vehicle: str, flights: list[str],
                      noise_file: str | None) -> dict:
     """The file's mapping (module docstring), in its key order."""
+    model = load_vehicle(vehicle)
     entries = {
-        "model_file": aircraft_file().name,
-        "model_sha256": model_file_sha256(),
+        "vehicle": vehicle,
+        "model_file": model.model_file.name,
+        "model_sha256": model_file_sha256(model),
         "aircraft": calibration.aircraft.to_dict(),
     }
     if noise_file:
@@ -85,20 +93,24 @@ def calibration_dict(calibration: ModelCalibration, flights: list[str],
     return entries
 
 
-def load_model_calibration(path: str | Path) -> CalibratedModel:
-    """Read a model calibration file; ModelCalibrationError (one line) when it cannot be
-    read, is malformed, or was made for another aerosonde.xml than the one shipped."""
+def load_model_calibration(path: str | Path, vehicle: str) -> CalibratedModel:
+    """Read a model calibration file for the vehicle; ModelCalibrationError (one line) when
+    it cannot be read, is malformed, or was made for another vehicle or another version of
+    its XML than the one shipped."""
     path = Path(path)
     reader = load_yaml(MODEL_CALIBRATION_FILE, path)
-    reader.check_keys({"model_file", "model_sha256", "aircraft"},
+    reader.check_keys({"vehicle", "model_file", "model_sha256", "aircraft"},
                       {"noise_calibration_file", "parameters", "worst_correlations", "fit"})
-    if reader.text("model_sha256") != model_file_sha256():
+    if reader.text("vehicle") != vehicle:
+        reader.fail(f"made for the vehicle {reader.data['vehicle']!r}, not {vehicle!r}")
+    model = load_vehicle(vehicle)
+    if reader.text("model_sha256") != model_file_sha256(model):
         reader.fail(f"made for another model file ({reader.data['model_file']!r} with "
                     f"SHA-256 {str(reader.data['model_sha256'])[:12]}...) than "
-                    f"{aircraft_file()} ({model_file_sha256()[:12]}...): recalibrate")
+                    f"{model.model_file} ({model_file_sha256(model)[:12]}...): recalibrate")
     noise_file = None
     if "noise_calibration_file" in reader.data:
         noise_file = path.parent / reader.text("noise_calibration_file")
         if not noise_file.is_file():
             reader.fail(f"'noise_calibration_file' {noise_file} does not exist")
-    return CalibratedModel(read_aircraft(reader.child("aircraft")), noise_file)
+    return CalibratedModel(read_aircraft(reader.child("aircraft"), vehicle), noise_file)

@@ -1,13 +1,13 @@
 """The prediction model's parameters a model calibration identifies, and what a value of them
 does to the model aircraft.
 
-Every parameter is a change from the shipped aerosonde.xml, in a unit of its own: a scale's
+Every parameter is a change from the vehicle's XML as shipped, in a unit of its own: a scale's
 change in percent (CDmin at +10 % is the file's CDmin times 1.10), a vane's bias in degrees.
 So the nominal model is 0 in every parameter, and a calibrated model is a FlownAircraft
 (uav_sim.flown_aircraft) that the residual node's model copies load: the scenario's
 `aircraft:` block read the other way round, one schema for both.
 
-- every aerodynamic coefficient of aerosonde.xml by its name there (coefficient_names());
+- every aerodynamic coefficient of the vehicle's XML by its name there (coefficient_names());
 - mass_scale, thrust_scale, inertia_{x,y,z}_scale: of the empty mass, the propeller's thrust
   and the empty inertia about each body axis;
 - cg_x_cm, cg_y_cm, cg_z_cm: the empty CG's offset along each body axis [cm] (a payload
@@ -31,6 +31,7 @@ from uav_sim.flown_aircraft import (
     FlownAircraft,
     coefficient_names,
 )
+from uav_sim.vehicles import Vehicle
 
 MASS_AND_THRUST = ("mass_scale", "thrust_scale")
 INERTIA = ("inertia_x_scale", "inertia_y_scale", "inertia_z_scale")
@@ -38,6 +39,8 @@ CG = ("cg_x_cm", "cg_y_cm", "cg_z_cm")
 CG_PRIOR_STD_CM = 2.0  # a CG is known within about this much per axis
 # SensorBias's fields, in its units (a scale, degrees)
 AIR_DATA_BIASES = ("airspeed_scale", "angle_of_attack_deg", "sideslip_deg")
+# every parameter that is not one of the vehicle's aerodynamic coefficients
+AIRCRAFT_PARAMETERS = MASS_AND_THRUST + INERTIA + CG + AIR_DATA_BIASES
 # What calibrate_model.py identifies unless told otherwise: what a real airframe differs in
 # that three ordinary fault-free flights show (docs/model_calibration.md), the weak ones held
 # near their prior rather than left out, so that a difference in one of them is not pushed
@@ -79,16 +82,22 @@ class ModelParameter:
         return self.name in AIR_DATA_BIASES
 
 
-def parameter_names() -> tuple[str, ...]:
-    """Every parameter a calibration can identify, coefficients first in the file's order."""
-    return coefficient_names() + MASS_AND_THRUST + INERTIA + CG + AIR_DATA_BIASES
+def parameter_names(vehicle: Vehicle) -> tuple[str, ...]:
+    """Every parameter a calibration of the vehicle can identify, coefficients first in the
+    file's order."""
+    return coefficient_names(vehicle) + AIRCRAFT_PARAMETERS
 
 
-def model_parameter(name: str) -> ModelParameter:
-    """The parameter's definition; ValueError naming it when it is not one."""
-    if name not in parameter_names():
-        raise ValueError(f"unknown model parameter '{name}'; known: "
-                         f"{', '.join(parameter_names())}")
+def model_parameter(name: str, vehicle: Vehicle) -> ModelParameter:
+    """The parameter's definition; ValueError naming it when it is not one of the vehicle's."""
+    if name not in parameter_names(vehicle):
+        raise ValueError(f"unknown model parameter '{name}' of {vehicle.name}; known: "
+                         f"{', '.join(parameter_names(vehicle))}")
+    return _definition(name)
+
+
+def _definition(name: str) -> ModelParameter:
+    """The definition of a parameter known to be one (model_parameter checks)."""
     if name in CG:
         limit_cm = 100.0 * CG_OFFSET_LIMIT_M
         return ModelParameter(name, "cm", prior_std=CG_PRIOR_STD_CM, step=SCALE_STEP_PCT,
@@ -103,34 +112,35 @@ def model_parameter(name: str) -> ModelParameter:
                           bounds=_SCALE_LIMITS_PCT)
 
 
-# In a parameter list: every aerodynamic coefficient of aerosonde.xml
+# In a parameter list: every aerodynamic coefficient of the vehicle's XML
 EVERY_COEFFICIENT = "coefficients"
 
 
-def parameter_list(text: str) -> tuple[str, ...]:
+def parameter_list(text: str, vehicle: Vehicle) -> tuple[str, ...]:
     """The parameters a comma-separated list names ("CDmin, Cmalpha"; EVERY_COEFFICIENT for
-    all of aerosonde.xml's coefficients); ValueError naming what is wrong when it names
-    none, an unknown one or one twice."""
+    all of the vehicle's coefficients); ValueError naming what is wrong when it names none,
+    an unknown one or one twice."""
     names = tuple(expanded for name in text.split(",") if name.strip()
-                  for expanded in (coefficient_names() if name.strip() == EVERY_COEFFICIENT
-                                   else (name.strip(),)))
+                  for expanded in (coefficient_names(vehicle)
+                                   if name.strip() == EVERY_COEFFICIENT else (name.strip(),)))
     for name in names:
-        model_parameter(name)
+        model_parameter(name, vehicle)
     if len(set(names)) != len(names) or not names:
         raise ValueError(f"the parameters must name each parameter once, got {list(names)}")
     return names
 
 
 def changed(aircraft: FlownAircraft, changes: Mapping[str, float]) -> FlownAircraft:
-    """The aircraft with each named parameter moved by its change [its unit]."""
+    """The aircraft with each named parameter (model_parameter's, checked) moved by its
+    change [its unit]."""
     coefficients = dict(aircraft.coefficients)
     inertia, cg = list(aircraft.inertia_scale), list(aircraft.cg_offset_m)
     fields: dict[str, object] = {}
     bias: dict[str, float] = {}
     for name, change in changes.items():
-        parameter = model_parameter(name)
+        parameter = _definition(name)
         step = float(change) * parameter.native_per_unit
-        if name in coefficient_names():
+        if name not in AIRCRAFT_PARAMETERS:
             coefficients[name] = coefficients.get(name, 1.0) + step
         elif name in INERTIA:
             inertia[INERTIA.index(name)] += step
@@ -152,7 +162,7 @@ def values_of(aircraft: FlownAircraft, names: tuple[str, ...]) -> dict[str, floa
     coefficients = dict(aircraft.coefficients)
     values = {}
     for name in names:
-        if name in coefficient_names():
+        if name not in AIRCRAFT_PARAMETERS:
             value = coefficients.get(name, 1.0)
         elif name in INERTIA:
             value = aircraft.inertia_scale[INERTIA.index(name)]
@@ -162,7 +172,7 @@ def values_of(aircraft: FlownAircraft, names: tuple[str, ...]) -> dict[str, floa
             value = getattr(aircraft.sensor_bias, name)
         else:
             value = getattr(aircraft, name)
-        parameter = model_parameter(name)
+        parameter = _definition(name)
         nominal = 1.0 if parameter.unit == "%" else 0.0  # a scale is 1 in the model, a bias 0
         values[name] = (value - nominal) / parameter.native_per_unit
     return values

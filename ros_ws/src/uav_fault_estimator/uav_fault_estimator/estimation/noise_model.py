@@ -1,5 +1,5 @@
-"""The residual noise model of the estimator: Q per sensor suite, calibrated on fault-free
-flights (scripts/calibrate_estimator.py writes config/residual_noise.yaml).
+"""The residual noise model of the estimator: Q per sensor suite, calibrated on a vehicle's
+fault-free flights (scripts/calibrate_estimator.py writes its folder's residual_noise.yaml).
 
 What the residuals carry without a fault is turbulence the models do not see plus sensor
 noise, both through F_a, so it depends on where the models' wind came from: the air data
@@ -20,14 +20,13 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from uav_common.package_data import config_path
+from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle
 
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 
 SUITES = {WIND_AIR_DATA: "air_data", WIND_FILTERED: "filtered_wind"}
 # suite name -> whether the aircraft has air data on board (scenario sensors.air_data)
 AIR_DATA_ON_BOARD = {suite: source == WIND_AIR_DATA for source, suite in SUITES.items()}
-CALIBRATION_FILE = "residual_noise.yaml"
 
 
 @dataclass(frozen=True)
@@ -42,8 +41,9 @@ class NoiseCalibration:
         """Q (6,) for residuals whose models flew wind_source."""
         return variance_factor * self.variances[SUITES[wind_source]]
 
-    def to_dict(self) -> dict:
-        return {suite: {"channels": list(RESIDUAL_CHANNELS),
+    def to_dict(self, vehicle: str) -> dict:
+        """The file's mapping: the vehicle it was made for, then each suite's."""
+        return {"vehicle": vehicle} | {suite: {"channels": list(RESIDUAL_CHANNELS),
                         "variances": [float(v) for v in self.variances[suite]],
                         "one_step_correlations": [float(c) for c in self.correlations[suite]]}
                 for suite in SUITES.values()}
@@ -110,23 +110,28 @@ def fit_noise(residuals: dict[str, list[np.ndarray]]) -> NoiseCalibration:
     return NoiseCalibration(variances, correlations)
 
 
-def shipped_noise_path() -> Path:
-    """The package's config/residual_noise.yaml."""
-    return config_path("uav_fault_estimator", CALIBRATION_FILE)
+def shipped_noise_path(vehicle: str = DEFAULT_VEHICLE) -> Path:
+    """The vehicle's residual_noise.yaml (its aircraft folder)."""
+    return load_vehicle(vehicle).noise_file
 
 
-def load_noise_calibration(path: str | Path = "") -> NoiseCalibration:
-    """Read a calibration file ("" for the shipped one); ValueError naming the file and
-    what is wrong."""
-    path = Path(path) if path else shipped_noise_path()
+def load_noise_calibration(path: str | Path = "",
+                           vehicle: str = DEFAULT_VEHICLE) -> NoiseCalibration:
+    """Read the vehicle's calibration file ("" for the shipped one); ValueError naming the
+    file and what is wrong, a file made for another vehicle included."""
+    path = Path(path) if path else shipped_noise_path(vehicle)
     try:
         data = yaml.safe_load(Path(path).read_text())
+        made_for = data["vehicle"]
         variances = {suite: np.array(data[suite]["variances"], dtype=float)
                      for suite in SUITES.values()}
         correlations = {suite: np.array(data[suite]["one_step_correlations"], dtype=float)
                         for suite in SUITES.values()}
     except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as error:
         raise ValueError(f"noise calibration {path}: cannot be read ({error})") from None
+    if made_for != vehicle:
+        raise ValueError(f"noise calibration {path}: made for the vehicle {made_for!r}, not "
+                         f"{vehicle!r}")
     for suite, values in variances.items():
         if values.shape != (len(RESIDUAL_CHANNELS),) or not np.all(values > 0):
             raise ValueError(f"noise calibration {path}: {suite} needs "

@@ -1,8 +1,8 @@
-"""The prediction model phi: the Aerosonde's accelerations at a measured state.
+"""The prediction model phi: a vehicle's accelerations at a measured state.
 
 Embedded-estimation paper, eq. 6: a_hat = phi(p, v, u, zeta, w_hat | f). The model is the
-JSBSim Aerosonde the simulator flies (uav_sim's aircraft definition, one source (docs/design.md)
-of truth), evaluated with `run_ic()`, which computes the accelerations of a given state
+JSBSim vehicle the simulator flies (uav_sim's aircraft folder, one source of truth,
+docs/design.md), evaluated with `run_ic()`, which computes the accelerations of a given state
 without integrating. Per evaluation:
 
 - Wind: the filtered wind w_hat enters through the air-relative velocity. The predictor
@@ -13,8 +13,8 @@ without integrating. Per evaluation:
   measured engine speed come from the same propeller tables (uav_sim.propeller) and act
   through the aircraft's `propeller_model` reactions.
 - Mass: the fuel on board is the measured fuel mass.
-- Aircraft: aerosonde.xml as shipped, or as a model calibration (model_calibration.py) says
-  the flown aircraft differs from it (a FlownAircraft: mass, coefficient and thrust scales).
+- Aircraft: the vehicle's XML as shipped, or as a model calibration (model_calibration.py)
+  says the flown aircraft differs from it (a FlownAircraft: mass, coefficient and thrust scales).
 - run_ic() runs twice: the first gives air density and effective throttle for the
   propeller, and the accelerations from which JSBSim forms alpha-dot in the second.
 
@@ -32,17 +32,15 @@ from typing import Any
 
 import jsbsim
 import numpy as np
-from uav_common.channels import CONTROL_CHANNELS, FAULT_NAMES, STATE_CHANNELS
+from uav_common.channels import CONTROL_CHANNELS, MODEL_FAULT_NAMES, STATE_CHANNELS
 from uav_sim.aircraft import (
     BODY_ACCELERATIONS,
     EFFECTIVE_THROTTLE,
-    FLAP_LIMIT_RAD,
     FUEL_LOADED_LBS,
     JSBSIM_ENGINE_ON,
     KG_PER_LB,
     KG_PER_M3_PER_SLUG_PER_FT3,
     M_PER_FT,
-    SURFACE_LIMIT_RAD,
     apply_propeller_model,
     create_fdm,
     set_faults,
@@ -50,6 +48,7 @@ from uav_sim.aircraft import (
 from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
 from uav_sim.frames import ned_to_body
 from uav_sim.propeller import Propeller
+from uav_sim.vehicles import Vehicle, load_vehicle
 
 from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
 from uav_fault_estimator.estimation.residuals import PredictorFactory, ResidualGenerator
@@ -58,17 +57,22 @@ _STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
 _CONTROL = {name: index for index, name in enumerate(CONTROL_CHANNELS)}
 _VELOCITY_NED = [_STATE[name] for name in ("velocity_north", "velocity_east", "velocity_down")]
 _BODY_RATES = [_STATE[name] for name in ("roll_rate", "pitch_rate", "yaw_rate")]
-# Control channel -> (JSBSim command, measured value per unit command). Surfaces follow their
-# commands without lag in the aircraft's FCS, so the measured position gives the command.
-_COMMANDS = {
-    "flap": ("fcs/flap-cmd-norm", FLAP_LIMIT_RAD),
-    "elevator": ("fcs/elevator-cmd-norm", SURFACE_LIMIT_RAD),
-    "aileron": ("fcs/aileron-cmd-norm", SURFACE_LIMIT_RAD),
-    "rudder": ("fcs/rudder-cmd-norm", SURFACE_LIMIT_RAD),
-    "throttle": ("fcs/throttle-cmd-norm", 1.0),
-    "mixture": ("fcs/mixture-cmd-norm", 1.0),
-    "ignition": ("fcs/ignition-cmd", 1.0),
-}
+
+
+def _commands(vehicle: Vehicle) -> dict[str, tuple[str, float]]:
+    """Control channel -> (JSBSim command, measured value per unit command). Surfaces follow
+    their commands without lag in the vehicle's FCS, so the measured position gives the
+    command."""
+    return {
+        "flap": ("fcs/flap-cmd-norm", vehicle.flap_limit_rad),
+        "elevator": ("fcs/elevator-cmd-norm", vehicle.surface_limit_rad),
+        "aileron": ("fcs/aileron-cmd-norm", vehicle.surface_limit_rad),
+        "rudder": ("fcs/rudder-cmd-norm", vehicle.surface_limit_rad),
+        "throttle": ("fcs/throttle-cmd-norm", 1.0),
+        "mixture": ("fcs/mixture-cmd-norm", 1.0),
+        "ignition": ("fcs/ignition-cmd", 1.0),
+    }
+
 _POSITION_AND_ATTITUDE = {
     "latitude": ("ic/lat-geod-rad", 1.0),
     "longitude": ("ic/long-gc-rad", 1.0),
@@ -80,17 +84,19 @@ _POSITION_AND_ATTITUDE = {
 
 
 class AircraftPredictor:
-    """phi(x | f) for one fixed fault vector f: a JSBSim Aerosonde of its own, the shipped
-    one or as `aircraft` says the flown one differs."""
+    """phi(x | f) for one fixed fault vector f: a JSBSim copy of the vehicle of its own, the
+    shipped one or as `aircraft` says the flown one differs."""
 
-    def __init__(self, faults_pct: Mapping[str, float], propeller: Propeller,
+    def __init__(self, faults_pct: Mapping[str, float], vehicle: Vehicle, propeller: Propeller,
                  aircraft: FlownAircraft = NOMINAL) -> None:
-        unknown = sorted(set(faults_pct) - set(FAULT_NAMES))
+        unknown = sorted(set(faults_pct) - set(MODEL_FAULT_NAMES))
         if unknown:
-            raise ValueError(f"unknown fault names {unknown}; known: {', '.join(FAULT_NAMES)}")
+            raise ValueError(f"unknown fault names {unknown}; known: "
+                             f"{', '.join(MODEL_FAULT_NAMES)}")
         self.faults_pct = dict(faults_pct)
         self.propeller = propeller
-        self.fdm: jsbsim.FGFDMExec = create_fdm(aircraft=aircraft)
+        self.commands = _commands(vehicle)
+        self.fdm: jsbsim.FGFDMExec = create_fdm(vehicle, aircraft=aircraft)
         self.fdm[JSBSIM_ENGINE_ON] = 0
         set_faults(self.fdm, self.faults_pct)
 
@@ -112,7 +118,7 @@ class AircraftPredictor:
             fdm[f"ic/{axis}-fps"] = float(value_mps) / M_PER_FT
         for axis, value_radps in zip("pqr", body_rates_radps, strict=True):
             fdm[f"ic/{axis}-rad_sec"] = float(value_radps)
-        for channel, (name, unit) in _COMMANDS.items():
+        for channel, (name, unit) in self.commands.items():
             command = float(controls[_CONTROL[channel]]) / unit
             # The flap's FCS takes commands 0..1 only (below 0 JSBSim's aerosurface_scale
             # gives NaN); sensor noise makes a retracted flap read a little below 0.
@@ -136,22 +142,24 @@ class AircraftPredictor:
         return np.concatenate([to_body.T @ velocity_rate_body, derivatives[3:]])
 
 
-def aircraft_predictor_factory(aircraft: FlownAircraft = NOMINAL) -> PredictorFactory:
+def aircraft_predictor_factory(vehicle: Vehicle,
+                               aircraft: FlownAircraft = NOMINAL) -> PredictorFactory:
     """Makes AircraftPredictor copies of one aircraft that share one set of propeller
     tables."""
-    propeller = Propeller.from_aircraft()
-    return lambda faults_pct: AircraftPredictor(faults_pct, propeller, aircraft)
+    propeller = Propeller.from_vehicle(vehicle)
+    return lambda faults_pct: AircraftPredictor(faults_pct, vehicle, propeller, aircraft)
 
 
 def residual_generator(parameters: Mapping[str, Any],
                        model: FlownAircraft = NOMINAL) -> ResidualGenerator:
-    """residual_node's generator from its parameters (config/residual_node.yaml's keys), its
-    models the aircraft a model calibration found (model; its air-data bias taken out)."""
+    """residual_node's generator from its parameters (config/residual_node.yaml's keys,
+    `vehicle` the aircraft its copies load), its models the aircraft a model calibration
+    found (model; its air-data bias taken out)."""
     p = parameters
     return ResidualGenerator(
-        aircraft_predictor_factory(model), p["fault_names"], p["secant_step_pct"],
-        p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"], p["wind_error_step_mps"],
-        model.sensor_bias,
+        aircraft_predictor_factory(load_vehicle(p["vehicle"]), model), p["fault_names"],
+        p["secant_step_pct"], p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
+        p["wind_error_step_mps"], model.sensor_bias,
     )
 
 

@@ -45,17 +45,23 @@ from uav_fault_msgs.msg import (
     ControlInputs,
     FaultAlarm,
 )
+from uav_sim.ros.vehicle_parameter import VEHICLE_PARAMETER
 
-from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.calibration import simulated_airframe
+from uav_fault_estimator.detection.calibration_file import (
+    load_calibration,
+    shipped_calibration_path,
+)
 from uav_fault_estimator.detection.detector import DetectorSample, SelfTuningDetector
 from uav_fault_estimator.detection.generators import NO_SETPOINTS
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
-    "calibration_file": ParameterSpec("detector calibration YAML; empty: the package's "
-                                      "config/detector_calibration.yaml", ""),
-    "airframe": ParameterSpec("the airframe flown: the calibration must be of it",
-                              "aerosonde_sim"),
+    "vehicle": VEHICLE_PARAMETER,
+    "calibration_file": ParameterSpec("detector calibration YAML; empty: the vehicle's "
+                                      "detector_calibration.yaml", ""),
+    "airframe": ParameterSpec("the airframe flown: the calibration must be of it; empty: the "
+                              "vehicle as simulated (<vehicle>_sim)", ""),
     "window": ParameterSpec("M: GLRT window; must be the calibration's [samples of 0.2 s]", 25,
                             2, 1000),
     # below 0.5 the RLS remembers about two samples: nothing left to identify
@@ -83,8 +89,9 @@ class DetectorNode(Node):
     def __init__(self) -> None:
         super().__init__("detector_node")
         p = declare_parameters(self, PARAMETERS, self.retune)
-        calibration = load_calibration(p["calibration_file"], p["window"],
-                                       p["forgetting_factor"], p["airframe"])
+        calibration = load_calibration(
+            p["calibration_file"] or str(shipped_calibration_path(p["vehicle"])), p["window"],
+            p["forgetting_factor"], p["airframe"] or simulated_airframe(p["vehicle"]))
         self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", qos)

@@ -28,6 +28,7 @@ from uav_common.ros.parameters import (
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import FaultEstimate, Residuals
+from uav_sim.ros.vehicle_parameter import VEHICLE_PARAMETER
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY, SOLVER_METHODS
 from uav_fault_estimator.estimation.estimator_step import (
@@ -54,6 +55,7 @@ from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
 # Live: the weights and tolerances (MovingHorizonEstimator.retune); the rest shapes the QP.
 PAPER_FAULTS = len(PAPER_FAULT_NAMES)  # the paper's setting: N = 50, four monotonic faults
 PARAMETERS = {
+    "vehicle": VEHICLE_PARAMETER,
     "fault_names": ParameterSpec("the estimated faults: columns of the residuals' S, by name",
                                  list(PAPER_FAULT_NAMES)),
     "fault_models": ParameterSpec(
@@ -75,8 +77,8 @@ PARAMETERS = {
                                -1000.0, 1000.0),
     "horizon": ParameterSpec("N: residual samples in the moving window", 50, 2, 2000),
     "noise_calibration_file": ParameterSpec(
-        "residual noise per sensor suite (scripts/calibrate_estimator.py); empty: the shipped "
-        "config/residual_noise.yaml", ""),
+        "residual noise per sensor suite (scripts/calibrate_estimator.py); empty: the "
+        "vehicle's residual_noise.yaml", ""),
     # 4: tuned on the default scenario (16, the AR(1) white equivalent of the 0.88
     # correlation after F_a, delays the ramps; docs/estimator.md)
     "noise_variance_factor": ParameterSpec(

@@ -6,7 +6,7 @@ Subscribes `state`, `controls`, `wind/filtered` and, where the aircraft has it, 
 filtered wind otherwise (residuals.py); a fallback is a WARN on /diagnostics. With a
 model_calibration_file (scripts/calibrate_model.py) the models are the calibrated aircraft
 and the calibration's air-data bias is taken out of the air data; a file made for another
-aerosonde.xml is refused at start (one line, exit status 2).
+vehicle, or another version of its XML, is refused at start (one line, exit status 2).
 """
 
 from __future__ import annotations
@@ -36,11 +36,12 @@ from uav_common.ros.parameters import (
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
 from uav_sim.flown_aircraft import NOMINAL
+from uav_sim.ros.vehicle_parameter import VEHICLE_PARAMETER
 
 from uav_fault_estimator.estimation.model_file import (
     MODEL_KEY,
-    SHIPPED_MODEL,
     load_model_calibration,
+    shipped_model,
 )
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residuals import (
@@ -51,6 +52,7 @@ from uav_fault_estimator.estimation.residuals import (
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 PARAMETERS = {
+    "vehicle": VEHICLE_PARAMETER,
     "fault_names": ParameterSpec("faults whose sensitivities are computed: the columns of S",
                                  list(PAPER_FAULT_NAMES)),
     "secant_step_pct": ParameterSpec("secant step s of the sensitivity, eq. 8 / 15 [%]", 5.0,
@@ -68,7 +70,8 @@ PARAMETERS = {
     "wind_error_step_mps": ParameterSpec(
         "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 0.0, 10.0),
     "model_calibration_file": ParameterSpec(
-        "model calibration YAML (scripts/calibrate_model.py); empty: aerosonde.xml as shipped", ""),
+        "model calibration YAML (scripts/calibrate_model.py); empty: the vehicle's XML as "
+        "shipped", ""),
     "qos": QOS_PARAMETER,
     "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
@@ -89,9 +92,10 @@ class ResidualNode(Node):
         if not p["update_period_s"] > 0:
             raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
         calibration = p["model_calibration_file"]
-        self.model = calibration or SHIPPED_MODEL
+        self.model = calibration or shipped_model(p["vehicle"])
         self.sampler = residual_sampler(
-            p, load_model_calibration(calibration).aircraft if calibration else NOMINAL)
+            p, load_model_calibration(calibration, p["vehicle"]).aircraft if calibration
+            else NOMINAL)
         self.generator = self.sampler.generator
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(Residuals, "residuals", qos)

@@ -58,10 +58,13 @@ from uav_sim.flown_aircraft import DIAGNOSTIC_KEY
 from uav_sim.mpc_guidance import FALLBACKS_KEY, METHOD_KEY
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
+from uav_sim.vehicles import vehicle_names
 
 PARAMETERS = {
     "scenario": ParameterSpec("scenario YAML file; empty: the shipped scenarios/default.yaml",
                               ""),
+    "vehicle": ParameterSpec("the aircraft flown; empty: the scenario's `vehicle`, which a "
+                             "name given here must equal", "", choices=("", *vehicle_names())),
     # at least 1 Hz; at most JSBSim's own 480 Hz (and a divisor of it: Simulation checks)
     "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock, a divisor "
                                     "of 480 [Hz]", 20.0,
@@ -88,6 +91,10 @@ class SimNode(Node):
         self.parameters = declare_parameters(self, PARAMETERS, self.change_pace)
         scenario_path = self.parameters["scenario"] or str(default_scenario_path())
         self.scenario = load_scenario(scenario_path)
+        vehicle = self.parameters["vehicle"]
+        if vehicle and vehicle != self.scenario.vehicle:
+            raise ValueError(f"parameter vehicle is {vehicle!r}, but the scenario {scenario_path} "
+                             f"flies {self.scenario.vehicle!r}")
         self.simulation = Simulation(
             self.scenario, sensor_rate_hz=self.parameters["sensor_rate_hz"]
         )
