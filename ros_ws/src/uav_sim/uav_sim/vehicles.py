@@ -8,8 +8,9 @@ particular to that aircraft:
   the simulator and the prediction model set (docs/aircraft.md lists them);
 - the engine (or motor) and propeller files its `<engine file=...>` and `<thruster file=...>`
   name;
-- `vehicle.yaml`: the autopilot's gains and limits, the trim solver's starting point, and
-  the vehicle's default and fault-free scenarios (files of the package's scenarios/);
+- `vehicle.yaml`: the autopilot's gains and limits, the trim solver's starting point, the
+  air data the model holds for, and the vehicle's default and fault-free scenarios (files
+  of the package's scenarios/);
 - `residual_noise.yaml` and `detector_calibration.yaml`: the estimator's noise model and the
   detector's calibration, made by scripts/calibrate_estimator.py and calibrate_detector.py on
   this aircraft's own fault-free flights.
@@ -27,7 +28,7 @@ from pathlib import Path
 from typing import TypeVar
 from xml.etree import ElementTree
 
-from uav_common.strict_yaml import FileKind, Reader, load_yaml
+from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
 
 from uav_sim.autopilot import AutopilotGains
 from uav_sim.paths import aircraft_dir, scenarios_dir
@@ -43,6 +44,9 @@ FLAP_POSITION = "fcs/flap-pos-rad"
 
 
 T = TypeVar("T")
+# (low, high) of airspeed [m/s], angle of attack and sideslip [rad]
+AirDataRange = tuple[tuple[float, float], tuple[float, float], tuple[float, float]]
+AIR_DATA_RANGE_KEYS = ("airspeed_mps", "angle_of_attack_rad", "sideslip_rad")
 
 
 class VehicleError(ValueError):
@@ -75,6 +79,7 @@ class Vehicle:
     propeller_file: Path
     autopilot: AutopilotGains
     trim_guess: TrimGuess
+    air_data_range: AirDataRange  # what the model's data covers: the residuals' air data
     default_scenario: Path  # its main flight, faults seeded
     fault_free_scenario: Path  # the same flight without faults: calibrations fly it
 
@@ -112,7 +117,8 @@ def load_vehicle(name: str = DEFAULT_VEHICLE) -> Vehicle:
     """The vehicle's folder read and checked; VehicleError with one line otherwise."""
     folder = aircraft_dir() / check_vehicle_name(name)
     reader = load_yaml(VEHICLE_YAML, folder / VEHICLE_FILE)
-    reader.check_keys({"vehicle", "description", "trim_guess", "autopilot", "scenarios"})
+    reader.check_keys({"vehicle", "description", "trim_guess", "autopilot", "air_data_range",
+                       "scenarios"})
     if reader.text("vehicle") != name:
         reader.fail(f"'vehicle' is {reader.data['vehicle']!r}, but the folder is {name!r}")
     model = _parse_xml(reader, folder / f"{name}.xml")
@@ -128,6 +134,7 @@ def load_vehicle(name: str = DEFAULT_VEHICLE) -> Vehicle:
         propeller_file=_existing(reader, folder / f"{thruster.get('file')}.xml"),
         autopilot=_numbers(reader.child("autopilot"), AutopilotGains),
         trim_guess=_numbers(reader.child("trim_guess"), TrimGuess),
+        air_data_range=_air_data_range(reader.child("air_data_range")),
         **_scenarios(reader.child("scenarios")))
 
 
@@ -150,6 +157,20 @@ def _single_limit(reader: Reader, model: ElementTree.Element, outputs: tuple[str
     if len(limits) != 1:
         reader.fail(f"the XML's {', '.join(outputs)} must share one range, got {sorted(limits)}")
     return limits.pop()
+
+
+def _air_data_range(reader: Reader) -> AirDataRange:
+    """air_data_range: {airspeed_mps: [low, high], angle_of_attack_rad: [...], sideslip_rad:
+    [...]}, each low below high."""
+    reader.check_keys(set(AIR_DATA_RANGE_KEYS))
+    limits = []
+    for key in AIR_DATA_RANGE_KEYS:
+        pair = reader.data[key]
+        if not (isinstance(pair, list) and len(pair) == 2 and all(map(is_number, pair))
+                and pair[0] < pair[1]):
+            reader.fail(f"'{reader.key(key)}' must be [low, high] with low < high, got {pair!r}")
+        limits.append((float(pair[0]), float(pair[1])))
+    return tuple(limits)
 
 
 def _scenarios(reader: Reader) -> dict[str, Path]:

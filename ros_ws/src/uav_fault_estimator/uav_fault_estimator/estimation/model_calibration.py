@@ -170,7 +170,8 @@ def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
         lambda changes: AircraftPredictor({}, vehicle, propeller, changed(model, changes)),
         copies, SCALE_STEP_PCT, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
         sensor_bias=model.sensor_bias,
-        bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias})
+        bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias},
+        air_data_range=vehicle.air_data_range)
 
 
 def _column_per_unit(parameter: ModelParameter) -> float:

@@ -156,10 +156,11 @@ def residual_generator(parameters: Mapping[str, Any],
     `vehicle` the aircraft its copies load), its models the aircraft a model calibration
     found (model; its air-data bias taken out)."""
     p = parameters
+    vehicle = load_vehicle(p["vehicle"])
     return ResidualGenerator(
-        aircraft_predictor_factory(load_vehicle(p["vehicle"]), model), p["fault_names"],
+        aircraft_predictor_factory(vehicle, model), p["fault_names"],
         p["secant_step_pct"], p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
-        p["wind_error_step_mps"], model.sensor_bias,
+        p["wind_error_step_mps"], model.sensor_bias, air_data_range=vehicle.air_data_range,
     )
 
 

@@ -22,8 +22,8 @@ turbulence; with these columns an estimator can take them out as nuisance parame
 Air data: given measured airspeed, alpha and beta (uav_sim's AirData), the models fly the
 measured air-relative velocity instead of C_bn (v - w_hat): the wind they get is the wind
 triangle v - C_nb V(alpha, beta), which gives exactly that air velocity in body axes. A
-sample whose air data is missing, non-finite or outside the aircraft model's validity
-(AIR_DATA_VALIDITY) falls back to the filtered wind; each sample says which it flew
+sample whose air data is missing, non-finite or outside the range the aircraft model holds
+for (the vehicle's air_data_range) falls back to the filtered wind; each sample says which it flew
 (wind_source).
 
 Frames: the model gives dv/dt of v = (NED ground velocity, body rates), so the linear rows
@@ -45,6 +45,7 @@ from uav_sim.filters import LowPass, SettlingLowPass
 from uav_sim.flown_aircraft import NO_BIAS, SensorBias
 from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
 from uav_sim.sensors import true_air_data
+from uav_sim.vehicles import AirDataRange
 
 # phi(state (14,), controls (7,), filtered NED wind (3,)) -> (6,) [dv_ned/dt m/s^2, dpqr/dt rad/s^2]
 Prediction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -84,18 +85,16 @@ ROW_NEEDS: tuple[frozenset[str], ...] = (
 
 # Where the models' wind came from (Residuals.WIND_FILTERED, Residuals.WIND_AIR_DATA).
 WIND_FILTERED, WIND_AIR_DATA = 0, 1
-# Air data the models can fly: airspeed [m/s], alpha and beta [rad] within the range of the
-# Aerosonde data (AeroSim sample model: Va 15-50 m/s, alpha -0.1..0.3 rad, |beta| <= 0.5
-# rad). Outside it (a blocked pitot, a stuck vane) the sample falls back.
-AIR_DATA_VALIDITY = ((15.0, 50.0), (-0.1, 0.3), (-0.5, 0.5))
 
 
-def air_data_usable(air_data: np.ndarray | None) -> bool:
-    """Whether a measured (airspeed, alpha, beta) is finite and within AIR_DATA_VALIDITY."""
+def air_data_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | None) -> bool:
+    """Whether a measured (airspeed [m/s], alpha, beta [rad]) is finite and within the
+    model's air_data_range ((low, high) per value; None: any finite). Outside it (a blocked
+    pitot, a stuck vane, flight the model's data does not cover) the sample falls back."""
     if air_data is None or not np.all(np.isfinite(air_data)):
         return False
-    return all(low <= value <= high
-               for value, (low, high) in zip(air_data, AIR_DATA_VALIDITY, strict=True))
+    return air_data_range is None or all(
+        low <= value <= high for value, (low, high) in zip(air_data, air_data_range, strict=True))
 
 
 # Columns of S beyond the faults: the error of the filtered wind estimate, w - w_hat [m/s].
@@ -151,10 +150,12 @@ class ResidualGenerator:
         wind_error_step_mps: float = 0.0,
         sensor_bias: SensorBias = NO_BIAS,
         bias_steps: Mapping[str, float] | None = None,
+        air_data_range: AirDataRange | None = None,
     ) -> None:
         """sensor_bias: the air-data bias taken out of measured air data; bias_steps:
         SensorBias field -> secant step (its unit) for a column of S per bias, named by the
-        field (0 on samples that fly the filtered wind)."""
+        field (0 on samples that fly the filtered wind); air_data_range: the air data the
+        models may fly (air_data_usable; the vehicle's)."""
         if not secant_step_pct > 0:
             raise ValueError(f"secant step must be positive, got {secant_step_pct} %")
         if not wind_error_step_mps >= 0:
@@ -162,6 +163,7 @@ class ResidualGenerator:
                              f"{wind_error_step_mps} m/s")
         self.sensitivity_period_s = sensitivity_period_s
         self.recovery_s = recovery_s
+        self.air_data_range = air_data_range
         self.predictor_factory = predictor_factory
         self.nominal = predictor_factory({})
         self.columns = [
@@ -272,7 +274,7 @@ class ResidualGenerator:
         state[FUEL_MASS] = self.fuel_filter.update(
             state[FUEL_MASS], 0.0 if self.last_time_s is None else time_s - self.last_time_s)
         wind, self.wind_source = self.held_inputs["wind"], WIND_FILTERED
-        if air_data_usable(air_data):
+        if air_data_usable(air_data, self.air_data_range):
             wind = _air_data_wind(state, air_data, self.sensor_bias)
             self.wind_source = WIND_AIR_DATA
         else:
