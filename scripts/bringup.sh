@@ -43,7 +43,6 @@ scenarios=()
 logs="$root/runs/bringup/logs"
 foxglove=""
 model_calibration=""
-noise_calibration=""
 STOP_TIMEOUT_S=5
 
 die() {
@@ -77,16 +76,6 @@ fi
 "$root/scripts/setup.sh"
 # shellcheck disable=SC1091
 source "$root/scripts/env.sh"
-if [ -n "$model_calibration" ]; then
-    # checked here (one line, before any node starts); the noise file it names, if any
-    noise_calibration="$(python -c '
-import sys
-from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
-try:
-    print(load_model_calibration(sys.argv[1]).noise_file or "")
-except ModelCalibrationError as error:
-    sys.exit(f"bringup.sh: {error}")' "$model_calibration")" || exit 2
-fi
 mkdir -p "$logs"
 logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
@@ -100,10 +89,10 @@ plan_args=()
 [ -n "$ns" ] && plan_args+=(--ns "$ns")
 [ -n "$params" ] && plan_args+=(--params "$params")
 for scenario in "${scenarios[@]}"; do plan_args+=(--scenario "$scenario"); done
+# a model calibration is checked there, for each scenario's vehicle: one line, no node started
 [ -n "$model_calibration" ] && plan_args+=(--model-calibration "$model_calibration")
-[ -n "$noise_calibration" ] && plan_args+=(--noise-calibration "$noise_calibration")
 [ -n "$foxglove" ] && plan_args+=(--foxglove)
-plan="$(python -m uav_fault_estimator.node_graph "${plan_args[@]}")" || exit 2
+plan="$(python -m uav_fault_estimator.node_graph --caller bringup.sh "${plan_args[@]}")" || exit 2
 
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:
 # a background job of a script starts with SIGINT ignored, and would keep it ignored.

@@ -103,10 +103,11 @@ def start_process(tmp_path: Path) -> Iterator:
 
 @pytest.fixture
 def short_scenario(tmp_path) -> Callable[..., Path]:
-    """short_scenario(duration_s, **overrides): the default scenario cut short, as a file."""
+    """short_scenario(duration_s, base=None, **overrides): a scenario (base; None: the
+    default) cut short, as a file."""
 
-    def write(duration_s: float, **overrides) -> Path:
-        scenario = yaml.safe_load(default_scenario_path().read_text())
+    def write(duration_s: float, base: Path | None = None, **overrides) -> Path:
+        scenario = yaml.safe_load((base or default_scenario_path()).read_text())
         scenario.update(duration_s=duration_s, **overrides)
         path = tmp_path / f"short_{len(list(tmp_path.glob('short_*')))}.yaml"
         path.write_text(yaml.safe_dump(scenario))

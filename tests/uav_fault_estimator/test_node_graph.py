@@ -92,3 +92,17 @@ def test_a_scenario_that_cannot_be_read_is_one_line(tmp_path):
     assert result.returncode == 2
     assert result.stderr == f"node_graph: scenario {missing}: cannot read the file (No such " \
                             "file or directory)\n"
+
+
+@pytest.mark.timeout(30)
+def test_a_model_calibration_of_another_vehicle_is_one_line_named_as_the_caller(tmp_path):
+    calibration = tmp_path / "model.yaml"
+    calibration.write_text("vehicle: carbon_z\nmodel_file: carbon_z.xml\nmodel_sha256: '0'\n"
+                           "aircraft: {}\n")
+    result = subprocess.run([sys.executable, "-m", "uav_fault_estimator.node_graph",
+                             "--caller", "bringup.sh", "--scenario", str(A),
+                             "--model-calibration", str(calibration)],
+                            capture_output=True, text=True, check=False)
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr == (f"bringup.sh: model calibration {calibration}: made for the "
+                             "vehicle 'carbon_z', not 'aerosonde'\n")

@@ -102,6 +102,19 @@ def test_default_scenario_values(default_data):
          "'setpoints[0].start_s' must be at least 0"),
         ("setpoints", [{"start_s": 60, "heading_deg": 90}],
          "unknown key 'setpoints[0].heading_deg'"),
+        ("vehicle", "cessna_172", "'vehicle': unknown vehicle 'cessna_172' (known: aerosonde, "
+                                  "carbon_z)"),
+        ("aircraft", {"coefficients": {"CLalpha": 1.1}, "vehicle_scale": 1.0},
+         "unknown key 'aircraft.vehicle_scale'"),
+        ("faults", [{"name": "elevator_stuck", "start_s": 60, "position": 1.5}],
+         "'faults[0].position' must be at most 1"),
+        ("faults", [{"name": "engine_cut", "start_s": 60, "position": 0.2}],
+         "unknown key 'faults[0].position' (known: name, start_s)"),
+        ("faults", [{"name": "rudder_stuck", "start_s": 60, "ramp_s": 10}],
+         "unknown key 'faults[0].ramp_s' (known: name, position, start_s)"),
+        ("faults", [{"name": "rudder_stuck", "start_s": 60},
+                    {"name": "rudder_stuck", "start_s": 90, "position": -0.5}],
+         "'faults[0].name': rudder_stuck is seeded more than once"),
     ],
 )
 def test_bad_scenarios_name_the_file_and_the_key(tmp_path, default_data, key, value, message):

@@ -14,6 +14,7 @@ from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, FaultVector, WindEstimate
+from uav_sim.paths import scenarios_dir
 
 pytestmark = pytest.mark.integration
 
@@ -104,6 +105,18 @@ def test_sim_node_with_a_missing_scenario_ends_with_one_message(tmp_path):
     assert result.returncode == 2  # bad input
     assert "Traceback" not in result.stderr
     assert str(missing) in result.stderr
+
+
+@pytest.mark.timeout(60)
+def test_a_vehicle_other_than_the_scenarios_ends_sim_node_with_one_line():
+    scenario = scenarios_dir() / "default.yaml"
+    result = subprocess.run(
+        ros2_run_argv("uav_sim", "sim_node", ros_args=["-p", f"scenario:={scenario}", "-p",
+                                                       "vehicle:=carbon_z"]),
+        capture_output=True, text=True, timeout=50)
+    assert result.returncode == 2
+    assert result.stderr == (f"sim_node: parameter vehicle is 'carbon_z', but the scenario "
+                             f"{scenario} flies 'aerosonde'\n")
 
 
 @pytest.mark.slow

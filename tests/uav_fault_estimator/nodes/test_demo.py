@@ -32,6 +32,7 @@ from uav_fault_estimator.recording.project_bag import project_typestore, read_to
 from uav_fault_estimator.reporting import report
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
+from uav_sim.vehicles import load_vehicle
 
 pytestmark = pytest.mark.integration
 
@@ -156,13 +157,16 @@ def test_a_node_dying_mid_run_ends_the_demo_with_its_name(
 @pytest.mark.timeout(150)
 def test_two_aircraft_in_one_domain_each_estimate_as_their_own_offline_chain(
         start_process, short_scenario, run_dir) -> None:
-    """Two scenarios: /uav1 and /uav2 fly on the first simulator's /clock, one recorder
+    """Two aircraft of different kinds: /uav1 the Aerosonde on the MPC guidance (every QP
+    solved), /uav2 the Carbon-Z; both fly on the first simulator's /clock, one recorder
     takes both, and each vehicle's estimates, read under its namespace, are its own core
-    chain's to the last digit; /uav2 flies the MPC guidance, every QP solved."""
+    chain's to the last digit."""
     duration_s = 60.0
-    methods = ("vector_field", "mpc")
-    scenarios = [short_scenario(duration_s, faults=[fault], guidance={"method": method})
-                 for fault, method in zip(TWO_FAULTS, methods, strict=True)]
+    methods = ("mpc", "vector_field")
+    vehicles = ("aerosonde", "carbon_z")
+    scenarios = [short_scenario(duration_s, load_vehicle(vehicle).default_scenario,
+                                faults=[fault], guidance={"method": method})
+                 for fault, method, vehicle in zip(TWO_FAULTS, methods, vehicles, strict=True)]
     demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
     assert demo.wait(120) == 0, demo.output()
     output = demo.output()
@@ -172,10 +176,11 @@ def test_two_aircraft_in_one_domain_each_estimate_as_their_own_offline_chain(
     assert "following /clock" in (run_dir / "logs/uav2/sim_node.log").read_text()
     assert "following /clock" not in (run_dir / "logs/uav1/sim_node.log").read_text()
     typestore = project_typestore()
-    for namespace, scenario, fault, method in zip(("/uav1", "/uav2"), scenarios, TWO_FAULTS,
-                                                  methods, strict=True):
+    for namespace, scenario, fault, method, vehicle in zip(
+            ("/uav1", "/uav2"), scenarios, TWO_FAULTS, methods, vehicles, strict=True):
         metrics = json.loads((run_dir / namespace[1:] / "metrics.json").read_text())
         assert metrics["pipeline"]["messages_received"] == 120
+        assert metrics["aircraft"]["model"] == shipped_model(vehicle)
         assert metrics["aircraft"]["guidance"] == method
         assert metrics["aircraft"]["guidance_fallbacks"] == 0
         assert metrics["solver"]["name"] == "proxsuite"  # its own mhe_node's /diagnostics

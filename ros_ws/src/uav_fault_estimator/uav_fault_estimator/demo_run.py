@@ -62,7 +62,7 @@ from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, loa
 from uav_sim.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator import node_graph
-from uav_fault_estimator.estimation.model_file import ModelCalibrationError, load_model_calibration
+from uav_fault_estimator.estimation.model_file import ModelCalibrationError
 from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
 
@@ -455,9 +455,9 @@ def main(runs_dir: Path) -> int:
         check_one_clock(scenarios)
         model_calibration = arguments.model_calibration and arguments.model_calibration.resolve()
         # refused here, before any process
-        noise_file = None
-        for flown in sorted({s.vehicle for s in scenarios}) if model_calibration else ():
-            noise_file = load_model_calibration(model_calibration, flown).noise_file
+        calibration = (node_graph.model_calibration_files(
+            model_calibration, [scenario.vehicle for scenario in scenarios])
+            if model_calibration else None)
     except (ScenarioError, ModelCalibrationError) as error:
         print(f"demo: {' '.join(str(error).split())}", file=sys.stderr)  # one line
         return 2
@@ -487,8 +487,7 @@ def main(runs_dir: Path) -> int:
         print(f"demo: {vehicle.namespace + ' flies ' if vehicle.namespace else ''}scenario "
               f"'{vehicle.scenario.name}' ({vehicle.scenario.path})", flush=True)
     print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
-    demo = Demo(vehicles, out, node_graph.ModelCalibrationFiles(model_calibration, noise_file)
-                if model_calibration else None)
+    demo = Demo(vehicles, out, calibration)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
         received = demo.fly()

@@ -4,11 +4,12 @@ several (namespaces, the one clock, a model calibration). demo_run.py (demo.sh) 
 scripts/bringup.sh start what it says (no ROS here).
 
     python -m uav_fault_estimator.node_graph [--ns NS] [--scenario FILE ...]
-        [--params FILE] [--model-calibration FILE --noise-calibration FILE] [--foxglove]
+        [--params FILE] [--model-calibration FILE] [--foxglove] [--caller NAME]
 
 prints bringup.sh's plan: one line per node in start order, `KEY PACKAGE EXECUTABLE` and
 the node's ROS arguments, each word quoted for a POSIX shell (KEY: `uavk/node` with several
-aircraft, else the node's name).
+aircraft, else the node's name). A scenario or model calibration that cannot be used is one
+line on stderr, named as the caller (default node_graph), and status 2.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from pathlib import Path
 from uav_common.ros_processes import SIM_TIME_ROS_ARGS
 from uav_sim.scenario import load_scenario
 from uav_sim.vehicles import DEFAULT_VEHICLE
+
+from uav_fault_estimator.estimation.model_file import load_model_calibration
 
 SIMULATOR = "sim_node"
 PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
@@ -58,6 +61,21 @@ class ModelCalibrationFiles:
 
     model_file: Path
     noise_file: Path | None = None
+
+
+def model_calibration_files(model_file: Path, vehicles: Sequence[str]) -> ModelCalibrationFiles:
+    """The model calibration for every one of the vehicles, read and checked before any
+    node starts; ModelCalibrationError (one line) when it cannot be used for one of them."""
+    noise_file = None
+    for vehicle in sorted(set(vehicles)):
+        noise_file = load_model_calibration(model_file, vehicle).noise_file
+    return ModelCalibrationFiles(model_file, noise_file)
+
+
+def scenario_vehicles(scenarios: Sequence[Path]) -> list[str]:
+    """The vehicle each scenario flies (none given: the default, one aircraft);
+    ScenarioError for a scenario that cannot be read."""
+    return [load_scenario(path).vehicle for path in scenarios] or [DEFAULT_VEHICLE]
 
 
 def node_ros_args(executable: str, namespace: str, clock_leader: bool,
@@ -105,7 +123,7 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
     be read."""
     namespaces = vehicle_namespaces(max(len(scenarios), 1), namespace)
     common = ["--params-file", str(params)] if params else []
-    vehicles = [load_scenario(path).vehicle for path in scenarios] or [DEFAULT_VEHICLE]
+    vehicles = scenario_vehicles(scenarios)
     plan = []
     for index in reversed(range(len(namespaces))):
         namespace = namespaces[index]
@@ -130,17 +148,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--scenario", action="append", type=Path, default=[])
     parser.add_argument("--params", type=Path)
     parser.add_argument("--model-calibration", type=Path)
-    parser.add_argument("--noise-calibration", type=Path)
     parser.add_argument("--foxglove", action="store_true")
+    parser.add_argument("--caller", default="node_graph", help="the name errors start with")
     arguments = parser.parse_args(argv)
-    calibration = (ModelCalibrationFiles(arguments.model_calibration,
-                                         arguments.noise_calibration)
-                   if arguments.model_calibration else None)
     try:
+        calibration = (model_calibration_files(arguments.model_calibration,
+                                               scenario_vehicles(arguments.scenario))
+                       if arguments.model_calibration else None)
         plan = live_plan(arguments.scenario, arguments.ns, arguments.params, calibration,
                          arguments.foxglove)
-    except ValueError as error:
-        print(f"node_graph: {error}", file=sys.stderr)
+    except ValueError as error:  # ScenarioError, ModelCalibrationError
+        print(f"{arguments.caller}: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
     print("\n".join(node.line() for node in plan))
     return 0
