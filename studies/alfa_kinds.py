@@ -1,21 +1,21 @@
 #!/usr/bin/env python3
 """ALFA's failure kinds seeded in simulation, and how soon the detector finds each (a study).
 
-    python -m studies.alfa_kinds --vehicle VEHICLE [--flights 20] [--json FILE]
+    python -m studies.alfa_kinds --vehicle VEHICLE [--flights 20] [--calibration FILE]
+        [--json FILE]
 
 For each of ALFA's kinds (both ailerons, one aileron, the elevator and the rudder stuck at
 0, as ALFA's injection pins them, and the engine cut), flies --flights variants of the
 vehicle's fault-free scenario (seeds from 501, winds of 20-25 % of its airspeed in as many
 directions; seeds the calibrations never flew) with the failure from an onset drawn in
 60-120 s (seeded), to 30 s after it; and --flights fault-free flights as long (the longest
-onset plus 30 s). The detector runs offline on each (detector_node's defaults, the
-vehicle's shipped calibration, on its 0.2 s grid) and counts, per kind: the flights with a
-combined alarm within 5 s of the onset (ALFA's evaluator counts a later one as a miss), the
-median and largest delay of those found at all, and the flights with a combined alarm
-before the onset (after the detector's settling); and the fault-free flights with any
-alarm. The detector sees what ALFA's logs show: the pinned surface position or throttle is
-one of its inputs, which it does not treat as evidence (its generators model the response
-to the surfaces as measured).
+onset plus 30 s). The detector runs offline on each (detector_node's defaults, the vehicle's
+shipped calibration or --calibration's, on its 0.2 s grid) and counts, per kind: the flights
+with a combined alarm within 5 s of the onset (ALFA's evaluator counts a later one as a
+miss), the median and largest delay of those found at all, and the flights with a combined
+alarm before the onset (after the detector's settling); and the fault-free flights with any
+alarm. The detector sees what ALFA's logs show: the pinned
+surface position or throttle is among its inputs, as measured.
 """
 
 from __future__ import annotations
@@ -36,7 +36,11 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
+from uav_fault_estimator.detection.calibration import (
+    DEFAULT_SAMPLE_PERIOD_S,
+    Calibration,
+    simulated_airframe,
+)
 from uav_fault_estimator.detection.calibration_file import (
     load_calibration,
     shipped_calibration_path,
@@ -71,19 +75,18 @@ def flights(vehicle: str, count: int) -> list[tuple[str, float, Scenario]]:
     return table
 
 
-def first_alarms(flight: GridFlight, vehicle: str, onset_s: float) -> tuple[float | None, bool]:
+def first_alarms(flight: GridFlight, calibration: Calibration,
+                 onset_s: float) -> tuple[float | None, bool]:
     """The first combined alarm's delay after the onset [s] (None: none), and whether one
     came before it (any alarm at all on a fault-free flight, onset nan)."""
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")
-    calibration = load_calibration(str(shipped_calibration_path(vehicle)), node["window"],
-                                   node["forgetting_factor"], f"{vehicle}_sim")
     alarms = [sample.time_s for sample in run_detector(
         calibration, flight.detector_flight, node["false_alarm_probability"])
         if sample.combined_alarm]
     if np.isnan(onset_s):
         return None, bool(alarms)
     after = [t - onset_s for t in alarms if t >= onset_s]
-    return (after[0] if after else None), any(t < onset_s for t in alarms)
+    return (float(after[0]) if after else None), any(t < onset_s for t in alarms)
 
 
 def summary(rows: list[tuple[str, float, float | None, bool]], count: int) -> dict:
@@ -94,9 +97,9 @@ def summary(rows: list[tuple[str, float, float | None, bool]], count: int) -> di
         delays = [delay for _, _, delay, _ in mine if delay is not None]
         result[kind] = {
             "flights": len(mine),
-            "false_alarm_flights": sum(early for *_, early in mine),
+            "false_alarm_flights": int(sum(early for *_, early in mine)),
             **({} if kind == FAULT_FREE else {
-                "found_within_5_s": sum(d <= WITHIN_S for d in delays),
+                "found_within_5_s": int(sum(d <= WITHIN_S for d in delays)),
                 "found": len(delays),
                 "median_delay_s": float(np.median(delays)) if delays else None,
                 "largest_delay_s": float(max(delays)) if delays else None})}
@@ -122,6 +125,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicle", choices=vehicle_names(), required=True)
     parser.add_argument("--flights", type=int, default=20)
+    parser.add_argument("--calibration", type=Path, help="default: the vehicle's shipped one")
     parser.add_argument("--json", type=Path)
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
@@ -130,7 +134,11 @@ def main() -> int:
     with Campaign(campaign_options(arguments)) as campaign:
         grid = fly_on_grid_each(campaign, [scenario for *_, scenario in table],
                                 DEFAULT_SAMPLE_PERIOD_S)
-    rows = [(kind, onset_s, *first_alarms(flight, arguments.vehicle, onset_s))
+    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
+    calibration = load_calibration(
+        str(arguments.calibration or shipped_calibration_path(arguments.vehicle)),
+        node["window"], node["forgetting_factor"], simulated_airframe(arguments.vehicle))
+    rows = [(kind, onset_s, *first_alarms(flight, calibration, onset_s))
             for (kind, onset_s, _), flight in zip(table, grid, strict=True)]
     result = summary(rows, arguments.flights)
     print_table(result)
@@ -139,6 +147,7 @@ def main() -> int:
     if arguments.json:
         arguments.json.write_text(json.dumps(
             {"vehicle": arguments.vehicle, "flights_per_kind": arguments.flights,
+             "generators": list(calibration.channels),
              "within_s": WITHIN_S, "kinds": result, "wall_s": wall_s}, indent=2) + "\n")
     return 0
 
