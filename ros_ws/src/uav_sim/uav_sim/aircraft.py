@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import functools
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import jsbsim
@@ -18,7 +18,6 @@ from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, aircraft_folder, appl
 from uav_sim.propeller import PropellerForces
 
 if TYPE_CHECKING:
-    from uav_sim.scenario import SeededFault
     from uav_sim.vehicles import Vehicle
 
 # 480 Hz: JSBSim's explicit propeller-speed update diverges at 120 Hz when the propeller
@@ -81,11 +80,13 @@ def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
         fdm[fault_property(name)] = value_pct
 
 
-def set_stuck_positions(fdm: jsbsim.FGFDMExec, faults: Sequence[SeededFault]) -> None:
-    """Where each seeded stuck surface's output is pinned once its fault is active."""
-    for fault in faults:
-        if fault.name in STUCK_SURFACE_FAULT_NAMES:
-            fdm[STUCK_POSITION_PROPERTY.format(name=fault.name)] = fault.position
+def set_stuck_positions(fdm: jsbsim.FGFDMExec, positions: Mapping[str, float]) -> None:
+    """Where each stuck surface's output is pinned once its fault is active: stuck-surface
+    fault name (STUCK_SURFACE_FAULT_NAMES) -> position [-1, 1]."""
+    for name, position in positions.items():
+        if name not in STUCK_SURFACE_FAULT_NAMES:
+            raise ValueError(f"{name} is no stuck surface ({', '.join(STUCK_SURFACE_FAULT_NAMES)})")
+        fdm[STUCK_POSITION_PROPERTY.format(name=name)] = position
 
 
 @functools.cache

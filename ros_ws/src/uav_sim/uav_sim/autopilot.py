@@ -19,30 +19,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from uav_sim.trim import Trim
+from uav_sim.vehicles import AutopilotGains
 
 
 def clamp(value: float, low: float, high: float) -> float:
     """value limited to [low, high] (scalars: np.clip costs microseconds per call, and the
     autopilot clamps six values at 120 Hz)."""
     return min(max(float(value), low), high)
-
-
-@dataclass(frozen=True)
-class AutopilotGains:
-    """Loop gains and limits (SI, radians); each vehicle's in its vehicle.yaml."""
-
-    altitude_p_radpm: float
-    altitude_i_radpms: float
-    climb_rate_d_radspm: float
-    pitch_limit_rad: float
-    pitch_p: float
-    pitch_rate_d_s: float
-    airspeed_p_permps: float
-    airspeed_i_permps_s: float
-    roll_p: float
-    roll_rate_d_s: float
-    roll_limit_rad: float
-    sideslip_p: float
 
 
 @dataclass(frozen=True)

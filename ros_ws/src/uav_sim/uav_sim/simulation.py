@@ -13,7 +13,13 @@ from dataclasses import dataclass
 
 import jsbsim
 import numpy as np
-from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, SETPOINT_FIELDS, STATE_CHANNELS
+from uav_common.channels import (
+    AIR_DATA_CHANNELS,
+    FAULT_NAMES,
+    SETPOINT_FIELDS,
+    STATE_CHANNELS,
+    STUCK_SURFACE_FAULT_NAMES,
+)
 
 from uav_sim.aircraft import (
     JSBSIM_DT_S,
@@ -108,7 +114,8 @@ class Simulation:
         self.sample_count = 0
         self.vehicle = load_vehicle(scenario.vehicle)
         self.fdm = create_fdm(self.vehicle, aircraft=scenario.aircraft)
-        set_stuck_positions(self.fdm, scenario.faults)
+        set_stuck_positions(self.fdm, {fault.name: fault.position for fault in scenario.faults
+                                       if fault.name in STUCK_SURFACE_FAULT_NAMES})
         self.trim = self._start()
         # North-east origin: where the flight starts. The engine spin-up held the aircraft
         # fixed in inertial space while the earth turned (about 250 m east per second at 55 N).

@@ -30,7 +30,6 @@ from xml.etree import ElementTree
 
 from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
 
-from uav_sim.autopilot import AutopilotGains
 from uav_sim.paths import aircraft_dir, scenarios_dir
 
 DEFAULT_VEHICLE = "aerosonde"
@@ -55,6 +54,25 @@ class VehicleError(ValueError):
 
 VEHICLE_YAML = FileKind("vehicle file", VehicleError, MAX_VEHICLE_BYTES,
                         "the shipped ones are under 2 kB")
+
+
+@dataclass(frozen=True)
+class AutopilotGains:
+    """The autopilot's loop gains and limits (SI, radians; uav_sim.autopilot), from the
+    vehicle's vehicle.yaml."""
+
+    altitude_p_radpm: float
+    altitude_i_radpms: float
+    climb_rate_d_radspm: float
+    pitch_limit_rad: float
+    pitch_p: float
+    pitch_rate_d_s: float
+    airspeed_p_permps: float
+    airspeed_i_permps_s: float
+    roll_p: float
+    roll_rate_d_s: float
+    roll_limit_rad: float
+    sideslip_p: float
 
 
 @dataclass(frozen=True)
