@@ -408,6 +408,26 @@ def alfa_kinds_in_simulation(data: Mapping[str, Any]) -> list[str]:
     return lines + key_values(data, ("wall_s",))
 
 
+def alfa_model_fit(data: Mapping[str, Any]) -> list[str]:
+    """A vehicle's model on real no-failure flights: per flight, the residual RMS per channel
+    of the shipped model and of the one calibrated on the other days, beside the noise the
+    simulator assumes; the parameters each calibration found."""
+    channels = data["channels"]
+    lines = [f"Vehicle `{data['vehicle']}`; residual RMS per channel ({', '.join(channels)}; "
+             "m/s², rad/s²). Fitted: " + ", ".join(data["parameters_fitted"]) + ".", ""]
+    rows = [["assumed noise", "-", *data["assumed_noise_rms"]]]
+    for name, flight in data["flights"].items():
+        rows.append([f"{name} shipped", flight["duration_s"], *flight["shipped_rms"]])
+        rows.append([f"{name} calibrated without {flight['day_left_out']}",
+                     flight["duration_s"], *flight["calibrated_rms"]])
+    lines += table(("flight", "s", *channels), rows)
+    found = {flight["day_left_out"]: flight["parameters"] for flight in data["flights"].values()}
+    names = data["parameters_fitted"]
+    lines += table(("day left out", *names), ((day, *(values[n] for n in names))
+                                              for day, values in found.items()))
+    return lines + key_values(data, ("wall_s",))
+
+
 def demo_run(metrics: Mapping[str, Any]) -> list[str]:
     """One run's metrics.json: the demo's table, with its solver and pipeline figures."""
     lines = [f"#### Scenario `{metrics.get('scenario')}`", "",
@@ -504,7 +524,7 @@ SECTIONS = (
             "python -m benchmarks.bench_campaigns --json docs/campaigns.json", campaigns,
             "The campaign layer: flights in one process against local Dask workers, the "
             "per-task cost, and the plan for a large map (docs/performance.md)."),
-    Section("ALFA's failures in simulation", "alfa_kinds_*.json",
+    Section("ALFA failures in simulation", "alfa_kinds_*.json",
             "python -m studies.alfa_kinds --vehicle carbon_z --json "
             "docs/alfa_kinds_carbon_z.json && python scripts/calibrate_detector.py --vehicle "
             "carbon_z --generators roll_tracking,pitch_tracking,lateral_force --out "
@@ -516,6 +536,12 @@ SECTIONS = (
             "vehicle's shipped calibration (the paper's roll, pitch and yaw generators) and, "
             "_tracking, with one of the tracking generators made on the same fault-free "
             "flights (docs/aircraft.md)."),
+    Section("The Carbon-Z model on ALFA flights", "alfa_model_fit.json",
+            "python -m studies.alfa_model_fit ALFA/ --vehicle carbon_z --json "
+            "docs/alfa_model_fit.json", alfa_model_fit,
+            "The Carbon-Z's model stepped along ALFA's five no-failure flights (the autopilot's "
+            "outputs, its wind estimate), as shipped and as calibrated on the other days' "
+            "flights, against the noise the simulator assumes (docs/aircraft.md)."),
     Section("ALFA benchmark", "alfa_benchmark.json",
             "python scripts/alfa_benchmark.py ALFA/ --json "
             "docs/alfa_benchmark.json", alfa_benchmark,
