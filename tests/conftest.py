@@ -24,6 +24,20 @@ from uav_sim.simulation import Sample
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The files whose slow tests allow the most time first (the sum of their timeouts, a
+    rough forecast of their length), each file's tests together and in order: test.sh's
+    workers take whole files in this order (--dist loadfile), so the long files start at
+    once and the short ones fill in at the end, instead of a long file starting last on one
+    worker while the other has nothing left."""
+    weight: dict[Path, float] = {}
+    for item in items:
+        timeout = item.get_closest_marker("timeout")
+        slow_s = float(timeout.args[0]) if timeout and item.get_closest_marker("slow") else 0.0
+        weight[item.path] = weight.get(item.path, 0.0) + slow_s
+    items.sort(key=lambda item: -weight[item.path])  # stable: files stay whole and in order
+
 @pytest.fixture(scope="session", autouse=True)
 def ros_logs(tmp_path_factory: pytest.TempPathFactory) -> None:
     """Every ROS process of this test session keeps DDS on loopback and logs into the
