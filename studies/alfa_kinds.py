@@ -75,13 +75,12 @@ def flights(vehicle: str, count: int) -> list[tuple[str, float, Scenario]]:
     return table
 
 
-def first_alarms(flight: GridFlight, calibration: Calibration,
+def first_alarms(flight: GridFlight, calibration: Calibration, false_alarm_probability: float,
                  onset_s: float) -> tuple[float | None, bool]:
     """The first combined alarm's delay after the onset [s] (None: none), and whether one
     came before it (any alarm at all on a fault-free flight, onset nan)."""
-    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     alarms = [sample.time_s for sample in run_detector(
-        calibration, flight.detector_flight, node["false_alarm_probability"])
+        calibration, flight.detector_flight, false_alarm_probability)
         if sample.combined_alarm]
     if np.isnan(onset_s):
         return None, bool(alarms)
@@ -89,7 +88,7 @@ def first_alarms(flight: GridFlight, calibration: Calibration,
     return (float(after[0]) if after else None), any(t < onset_s for t in alarms)
 
 
-def summary(rows: list[tuple[str, float, float | None, bool]], count: int) -> dict:
+def summary(rows: list[tuple[str, float, float | None, bool]]) -> dict:
     """Per kind: found within WITHIN_S, found at all, delays, false alarms before onset."""
     result = {}
     for kind in (*ACTUATOR_FAULT_NAMES, FAULT_FREE):
@@ -138,9 +137,10 @@ def main() -> int:
     calibration = load_calibration(
         str(arguments.calibration or shipped_calibration_path(arguments.vehicle)),
         node["window"], node["forgetting_factor"], simulated_airframe(arguments.vehicle))
-    rows = [(kind, onset_s, *first_alarms(flight, calibration, onset_s))
+    rows = [(kind, onset_s, *first_alarms(flight, calibration,
+                                          node["false_alarm_probability"], onset_s))
             for (kind, onset_s, _), flight in zip(table, grid, strict=True)]
-    result = summary(rows, arguments.flights)
+    result = summary(rows)
     print_table(result)
     wall_s = time.monotonic() - started
     print(f"{len(table)} flights in {wall_s:.0f} s")

@@ -111,10 +111,11 @@ def steady_engine_speed(state: np.ndarray, controls: np.ndarray, wind_ned_mps: n
     return rpm
 
 
-def residual_rows(flight: SensorFlight, vehicle: str, model: FlownAircraft) -> np.ndarray:
-    """The valid residual rows (K, 6) residual_node's generator gives on the flight."""
-    sampler = residual_sampler({**default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                                "vehicle": vehicle, "fault_names": []}, model)
+def residual_rows(flight: SensorFlight, residual_parameters: dict,
+                  model: FlownAircraft) -> np.ndarray:
+    """The valid residual rows (K, 6) residual_node's generator (its parameters, no fault
+    columns) gives on the flight with the model's copies."""
+    sampler = residual_sampler({**residual_parameters, "fault_names": []}, model)
     rows = []
     for k, time_s in enumerate(flight.times_s):
         try:
@@ -152,10 +153,10 @@ def main() -> int:
                                          .variances[FILTERED])]
     print("channels: " + ", ".join(RESIDUAL_CHANNELS) + " (m/s^2, rad/s^2)")
     print("assumed noise RMS: " + " ".join(f"{v:.3f}" for v in assumed))
-    shipped = {f.name: rms(residual_rows(f, vehicle, NOMINAL)) for f in flights}
-    days = sorted({day_of(f.name) for f in flights})
     residual_parameters = {**default_parameters("uav_fault_estimator", "residual_node.yaml"),
                            "vehicle": vehicle}
+    shipped = {f.name: rms(residual_rows(f, residual_parameters, NOMINAL)) for f in flights}
+    days = sorted({day_of(f.name) for f in flights})
     held_out = {}
     for day in days:
         fitted_on = [f for f in flights if day_of(f.name) != day]
@@ -164,7 +165,8 @@ def main() -> int:
         values = dict(zip(calibration.names, calibration.values.round(2).tolist(), strict=True))
         for flight in (f for f in flights if day_of(f.name) == day):
             held_out[flight.name] = {"day_left_out": day, "calibrated_rms": rms(
-                residual_rows(flight, vehicle, calibration.aircraft)), "parameters": values}
+                residual_rows(flight, residual_parameters, calibration.aircraft)),
+                "parameters": values}
     for flight in flights:
         print(f"{flight.name}: shipped "
               + " ".join(f"{v:.3f}" for v in shipped[flight.name]) + "; calibrated on the "
