@@ -241,7 +241,8 @@ def test_the_tracking_and_propulsion_generators_regress_as_documented() -> None:
 
 
 @pytest.mark.timeout(30)
-def test_the_lateral_force_is_zero_in_a_coordinated_turn_and_reads_a_sideslip() -> None:
+def test_the_body_forces_are_zero_in_a_coordinated_turn_and_read_a_sideslip_and_a_drag(
+) -> None:
     """Heading north at 20 m/s, wings level, pitch and yaw 0, over 0.2 s."""
     before = GridSample(1.0, np.zeros(14), np.zeros(7), np.full(3, math.nan))
     before.state[6] = 20.0
@@ -257,3 +258,10 @@ def test_the_lateral_force_is_zero_in_a_coordinated_turn_and_reads_a_sideslip() 
     turn.state[7] = GRAVITY_MPS2 * math.tan(bank_rad) * 0.2  # the turn's centripetal pull
     assert regressions(("lateral_force",), turn, before)["lateral_force"][1] == pytest.approx(
         0.0, abs=1e-12)
+    assert regressions(("longitudinal_force",), turn, before)["longitudinal_force"][1] == (
+        pytest.approx(0.0, abs=1e-12))
+    drag = GridSample(1.2, before.state.copy(), before.controls, before.setpoints)
+    drag.state[6] = 19.8  # north [m/s]: 1 m/s^2 of deceleration, level, no thrust left
+    phi, force_mps2 = regressions(("longitudinal_force",), drag, before)["longitudinal_force"]
+    np.testing.assert_allclose(phi, [1.0])
+    assert force_mps2 == pytest.approx(-1.0)

@@ -20,6 +20,7 @@ aircraft's response; the propulsion channel the throttle it needs:
     pitch_tracking  q[k] = a (theta_c[k] - theta[k]) + b        the pitch loop's response
     climb_tracking  h'[k] = a h'_c[k] + b                       the climb the autopilot gets
     lateral_force   f_y[k] = c                                  the sideslip's side force
+    longitudinal_force  f_x[k] = c                              thrust less drag, per mass
     propulsion      throttle[k] = a sin(gamma[k]) + b (1 / cos(phi[k])^2 - 1) + c
 
 p, q, r body rates [rad/s]; da aileron, de elevator, dr rudder [rad]; phi, theta roll and
@@ -30,7 +31,10 @@ whatever climb its autopilot commands. lateral_force is the body-y specific forc
 [m/s^2] (uav_sim.frames), from the ground velocity's change since the sample before: an
 autopilot that coordinates its turns flies with f_y near a constant (the sensors' bias),
 and a rudder stuck off centre holds the aircraft in a sideslip whose side force shows
-within a second, whatever the roll loop does to hide it. The propulsion channel is the
+within a second, whatever the roll loop does to hide it. longitudinal_force is its body-x
+twin, thrust less drag per unit mass: an autopilot holding its speed holds it near a
+constant, and an engine that stops drops it by the cruise thrust over the mass at once,
+before the speed or the height shows it. The propulsion channel is the
 throttle the autopilot needs to hold its speed against the climb it flies and its turns'
 load factor (n^2 - 1, the induced drag's share): a loss of thrust raises it (c, and the
 residual). Where a failure cuts the throttle output itself (ALFA's engine failures), it
@@ -130,12 +134,20 @@ def _climb_tracking(now: GridSample, before: GridSample | None) -> Regression:
     return np.array([-now.setpoints[_DOWN_SETPOINT], 1.0]), -now.state[_VD]
 
 
-def _lateral_force(now: GridSample, before: GridSample) -> Regression:
+def _specific_force_mps2(now: GridSample, before: GridSample) -> np.ndarray:
+    """The body-axes specific force [m/s^2] from the ground velocity's change since before."""
     velocity = [_VN, _VE, _VD]
     elapsed_s = now.time_s - before.time_s  # > 0: the grid's samples come in time order
     acceleration_ned_mps2 = (now.state[velocity] - before.state[velocity]) / elapsed_s
-    force = specific_force_body_mps2(acceleration_ned_mps2, *now.state[[_ROLL, _PITCH, _YAW]])
-    return np.array([1.0]), force[1]
+    return specific_force_body_mps2(acceleration_ned_mps2, *now.state[[_ROLL, _PITCH, _YAW]])
+
+
+def _lateral_force(now: GridSample, before: GridSample) -> Regression:
+    return np.array([1.0]), _specific_force_mps2(now, before)[1]
+
+
+def _longitudinal_force(now: GridSample, before: GridSample) -> Regression:
+    return np.array([1.0]), _specific_force_mps2(now, before)[0]
 
 
 def _propulsion(now: GridSample, before: GridSample | None) -> Regression:
@@ -160,6 +172,7 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("pitch_tracking", ("a_pt", "b_pt"), False, _pitch_tracking),
     Generator("climb_tracking", ("a_ct", "b_ct"), False, _climb_tracking),
     Generator("lateral_force", ("c_fy",), True, _lateral_force),
+    Generator("longitudinal_force", ("c_fx",), True, _longitudinal_force),
     Generator("propulsion", ("a_tg", "b_tn", "c_t"), False, _propulsion),
 )}
 # The paper's three: what a vehicle's shipped calibration uses.
