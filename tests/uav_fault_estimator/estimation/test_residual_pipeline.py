@@ -102,6 +102,30 @@ def test_a_dropout_invalidates_the_rows_that_need_the_channel_then_recovers() ->
 
 
 @pytest.mark.timeout(30)
+def test_a_gap_of_up_to_four_samples_is_bridged_and_a_longer_one_is_a_loss() -> None:
+    """Velocity lost from 20.0 s: for 4 samples (0.2 s, BRIDGED_GAP_S) the samples are
+    skipped and every row stays valid, the residuals within 1e-3 m/s^2 of the run without
+    the gap (of about 1: F_a's one step over the gap instead of four) and fading with F_a;
+    for 5 the rows that need it are invalid until recovery_s after it is back."""
+    clean = {round(s.time_s, 2): s for s in fly(generator(), [10.0, 5.0], 30.0)
+             if s is not None}
+    bridged = fly(generator(), [10.0, 5.0], 30.0, dropout=("velocity_north", 20.0, 20.19))
+    by_time = {round(s.time_s, 2): s for s in bridged if s is not None}
+    assert sorted(set(clean) - set(by_time)) == [20.0, 20.05, 20.1, 20.15]
+    assert all(sample.valid.all() for t, sample in by_time.items() if t >= TAU_A_S * 3)
+    moved = max(float(np.abs(sample.residual - clean[t].residual).max())
+                for t, sample in by_time.items() if t >= 20.2)
+    print(f"largest residual difference after the bridged gap: {moved:.1e}")
+    assert moved < 1e-3
+    assert np.abs(by_time[30.0].residual - clean[30.0].residual).max() < 0.1 * moved
+    lost = fly(generator(recovery_s=5.0), [10.0, 5.0], 30.0,
+               dropout=("velocity_north", 20.0, 20.24))
+    lost_at = {round(s.time_s, 2): s for s in lost if s is not None}
+    assert not lost_at[20.2].valid[0] and not lost_at[25.2].valid[0]
+    assert lost_at[25.25].valid.all()
+
+
+@pytest.mark.timeout(30)
 def test_time_going_backwards_is_refused_until_reset() -> None:
     gen = generator()
     fly(gen, [0.0, 0.0], 1.0)

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from uav_common.channels import STATE_CHANNELS, state_indices
+from uav_common.sample_grid import GRID_TOLERANCE_S
 from uav_sim.filters import LowPass, SettlingLowPass
 from uav_sim.flown_aircraft import NO_BIAS, SensorBias
 from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
@@ -64,6 +65,13 @@ ATTITUDE = state_indices("roll", "pitch", "yaw")
 # mean mass too low (measured: lift residual biased by 0.36 of its noise deviation on
 # fault-free flights). Fuel burns at 0.11 g/s: 30 s lag it by 3 g.
 FUEL_MASS_TAU_S = 30.0
+# A gap in the inputs this short [s] (a glitch the input gate took out: up to four samples
+# at 20 Hz) is bridged: the samples in it are skipped whole and the next complete one's
+# velocity difference spans the gap, which is exact (a mean acceleration over a longer
+# interval), so the filters and every row go on as if nothing were lost. Longer, the
+# inputs are missing: their last good values held, the rows that need them invalid until
+# recovery_s after they are back.
+BRIDGED_GAP_S = 0.2
 
 _AIR_DATA = ("velocity_north", "velocity_east", "velocity_down", "roll", "pitch", "yaw")
 # The state channels each residual row cannot do without: its observed derivative, the
@@ -136,7 +144,8 @@ class ResidualGenerator:
     or wind makes them missing as a whole (their last good values are used meanwhile).
     Sensitivities are recomputed every sensitivity_period_s and held in between. A row is
     invalid for recovery_s after the start, while a channel it needs is missing, and for
-    recovery_s after the channel is back: the time its filters take to settle.
+    recovery_s after the channel is back: the time its filters take to settle; a gap of at
+    most BRIDGED_GAP_S is bridged instead (no row invalid, no filter disturbed).
     """
 
     def __init__(
@@ -198,6 +207,7 @@ class ResidualGenerator:
         self.predicted_filter.reset()
         self.fuel_filter.reset()
         self.last_time_s: float | None = None
+        self.last_complete = False  # the last sample taken had every input
         self.last_velocity: np.ndarray | None = None
         self.last_prediction: np.ndarray | None = None
         self.held_state = np.full(len(STATE_CHANNELS), np.nan)
@@ -255,6 +265,7 @@ class ResidualGenerator:
 
         air_data (3,): measured true airspeed [m/s], alpha, beta [rad], or None; when usable
         (air_data_usable) the models fly it instead of the filtered wind wind_ned_mps.
+        Returns None too for a sample skipped within a bridged gap (BRIDGED_GAP_S).
         Raises ValueError for a time that does not increase (call reset() first), and for a sample
         the models cannot evaluate (the model copies are then rebuilt).
         """
@@ -262,12 +273,14 @@ class ResidualGenerator:
             raise ValueError(f"time {time_s} s does not follow {self.last_time_s} s: reset first")
         finite = np.isfinite(state)
         missing = {name for name, ok in zip(STATE_CHANNELS, finite, strict=True) if not ok}
+        missing |= {name for name, value in (("controls", controls), ("wind", wind_ned_mps))
+                    if not np.all(np.isfinite(value))}
+        if missing and self._bridges(time_s):
+            return None
         self.held_state = np.where(finite, state, self.held_state)
         for name, value in (("controls", controls), ("wind", wind_ned_mps)):
-            if np.all(np.isfinite(value)):
+            if name not in missing:
                 self.held_inputs[name] = np.array(value, dtype=float)
-            else:
-                missing.add(name)
         if not np.all(np.isfinite(self.held_state)) or len(self.held_inputs) < 2:
             return None  # some input never seen yet: nothing can be predicted
         state = self.held_state.copy()
@@ -297,7 +310,15 @@ class ResidualGenerator:
             self.predicted_filter.update(predicted_mean, dt_s)
             self.latest = self._sample(time_s, state, valid)
         self.last_time_s, self.last_velocity, self.last_prediction = time_s, velocity, prediction
+        self.last_complete = not missing
         return self.latest
+
+    def _bridges(self, time_s: float) -> bool:
+        """Whether a sample with a missing input at time_s [s] falls in a bridged gap: the
+        last sample taken, BRIDGED_GAP_S ago or less, had every input (a gap begun earlier
+        is a loss, and is not bridged from its middle)."""
+        return (self.last_time_s is not None and self.last_complete
+                and time_s - self.last_time_s <= BRIDGED_GAP_S + GRID_TOLERANCE_S)
 
     def _sample(self, time_s: float, state: np.ndarray, valid: np.ndarray) -> ResidualSample:
         """The filtered quantities with their linear rows rotated to body axes."""
