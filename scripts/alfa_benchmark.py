@@ -50,6 +50,7 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     run_campaign,
 )
+from uav_fault_estimator.cluster_security import ClusterAddressError
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
@@ -287,7 +288,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         record = run(arguments)
         if arguments.json is not None:
             arguments.json.write_text(json.dumps(record, indent=2) + "\n")
-    except BadInputError as error:
+    except (BadInputError, ClusterAddressError) as error:
         print(f"{PROGRAM}: {error}", file=sys.stderr)
         return 2
     except OSError as error:

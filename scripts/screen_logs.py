@@ -63,6 +63,7 @@ from uav_fault_estimator.campaigns import (
     campaign_options,
     run_campaign,
 )
+from uav_fault_estimator.cluster_security import ClusterAddressError
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
@@ -316,7 +317,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     arguments = parser().parse_args(argv)
     try:
         arguments.run(arguments)
-    except BadInputError as error:
+    except (BadInputError, ClusterAddressError) as error:
         print(f"{PROGRAM}: {error}", file=sys.stderr)
         return 2
     return 0

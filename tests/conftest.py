@@ -46,6 +46,13 @@ def ros_logs(tmp_path_factory: pytest.TempPathFactory) -> None:
     os.environ["ROS_LOG_DIR"] = str(tmp_path_factory.mktemp("ros_log"))
 
 
+@pytest.fixture(scope="session", autouse=True)
+def user_configuration(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """The session's own user configuration folder (the campaigns' cache key), not the
+    user's ~/.config."""
+    os.environ["XDG_CONFIG_HOME"] = str(tmp_path_factory.mktemp("config"))
+
+
 @pytest.fixture(scope="session")
 def domain_locks() -> Iterator[list[IO[str]]]:
     """The lock of the domain id in use (ros_domain), released at the session's end."""

@@ -4,16 +4,21 @@ cached on disk, failures reported and the campaign going on, and a progress bar.
 
 Execution is Dask distributed's (`dask[distributed]`): a LocalCluster of `workers`
 processes of one thread each on 127.0.0.1, or the scheduler at `cluster`
-(tcp://HOST:8786), whose workers run this checkout's code (docs/performance.md says how
-to start them). A worker that dies has its tasks redone on another (Dask's own). Each task
-is pure: its result depends on the task and the code alone, so the results are the serial
-run's bit for bit and a cached one is as good as a new one.
+(tls://HOST:8786 with the certificates of `tls_certs`, cluster_security.py; plain tcp://
+on this machine only, unless `insecure_cluster`), whose workers run this checkout's code
+(docs/performance.md says how to start them). A worker that dies has its tasks redone on
+another (Dask's own). Each task is pure: its result depends on the task and the code alone,
+so the results are the serial run's bit for bit and a cached one is as good as a new one.
 
 The cache: `cache_dir/<code version>/<task key>.pkl`, the code version a hash of the
 project's packages (Python modules and their data: aircraft, scenarios, calibrations) and of
 the file defining the function, the task key a hash of the pickled function (by reference)
 and the pickled task. A campaign computes only the tasks without a cached result, and stores
-each result as it arrives, so an interrupted campaign resumes where it stopped.
+each result as it arrives, so an interrupted campaign resumes where it stopped. Unpickling
+runs code, and a cache folder may be shared (a team's disk, a CI cache): each entry carries
+an HMAC-SHA256 of its name and contents under the user's own key (cache_key_path, 0600),
+checked before anything is unpickled. An entry that fails the check, is cut short or does
+not load is recomputed with one warning naming it: never trusted, never fatal.
 """
 
 from __future__ import annotations
@@ -21,10 +26,13 @@ from __future__ import annotations
 import argparse
 import functools
 import hashlib
+import hmac
 import inspect
 import logging
 import os
 import pickle
+import secrets
+import stat
 import sys
 import time
 import traceback
@@ -39,6 +47,12 @@ import dask.config
 from distributed import Client, LocalCluster, as_completed
 from tqdm import tqdm
 from uav_common.package_data import share_dir
+
+from uav_fault_estimator.cluster_security import (
+    INSECURE_WARNING,
+    ClusterAddressError,
+    cluster_access,
+)
 
 # The packages whose code and data a task's result may depend on.
 CODE_PACKAGES = ("uav_common", "uav_sim", "uav_fault_estimator")
@@ -55,18 +69,24 @@ QUIET_WORKERS = {
     "distributed.admin.system-monitor.interval": "5s",
 }
 PROGRESS_AFTER_S = 2.0  # a campaign shows its progress bar once it has run this long [s]
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
 class CampaignOptions:
     """Where a campaign runs. workers: local processes (0: in this process, one task after
-    the other); cluster: a Dask scheduler's address instead (its workers); cache_dir: the
-    results' cache (None: none); progress: a progress bar on stderr (for work that lasts)."""
+    the other); cluster: a Dask scheduler's address instead (its workers), tls_certs the
+    folder of cluster_certs.py's certificates for a tls:// one, insecure_cluster to allow
+    plain tcp:// off this machine (cluster_security.cluster_access); cache_dir: the
+    results' cache (None: none); progress: a progress bar on stderr (for work that
+    lasts)."""
 
     workers: int = field(default_factory=lambda: os.cpu_count() or 1)
     cluster: str | None = None
     cache_dir: Path | None = None
     progress: bool = True
+    tls_certs: Path | None = None
+    insecure_cluster: bool = False
 
 
 @dataclass(frozen=True)
@@ -110,13 +130,13 @@ class CampaignFailedError(RuntimeError):
 
 
 def exit_on_failed_tasks(main: Callable[[], int | None]) -> Callable[[], int]:
-    """A script's main that, when tasks of a campaign failed, prints which (stderr) and
-    returns 1 rather than ending in a traceback."""
+    """A script's main that, when tasks of a campaign failed or its cluster was refused,
+    prints why (stderr) and returns 1 rather than ending in a traceback."""
     @functools.wraps(main)
     def guarded() -> int:
         try:
             return main() or 0
-        except CampaignFailedError as error:
+        except (CampaignFailedError, ClusterAddressError) as error:
             print(f"{Path(sys.argv[0]).name}: {error}", file=sys.stderr)
             return 1
     return guarded
@@ -207,11 +227,17 @@ class Campaign:
     def client(self) -> Client:
         """The Dask client, connected at the first call: to the cluster the options name, or
         to a LocalCluster of options.workers single-threaded processes (QUIET_WORKERS),
-        every port of it (the dashboard's too) on 127.0.0.1."""
+        every port of it (the dashboard's too) on 127.0.0.1. ClusterAddressError, before
+        connecting, for a cluster address cluster_access refuses."""
         if self._client is None:
-            if self.options.cluster is not None:
+            options = self.options
+            if options.cluster is not None:
+                access = cluster_access(options.cluster, options.tls_certs,
+                                        options.insecure_cluster)
+                if access.insecure:
+                    _log.warning(INSECURE_WARNING.format(address=access.address))
                 self._client = self._stack.enter_context(
-                    Client(self.options.cluster, timeout="30s"))
+                    Client(access.address, security=access.security, timeout="30s"))
             else:
                 self._stack.enter_context(dask.config.set(QUIET_WORKERS))
                 cluster = self._stack.enter_context(LocalCluster(
@@ -264,11 +290,13 @@ def _short(task: Any, length: int = 120) -> str:
 
 
 class TaskCache:
-    """Results of one function's tasks on disk, for this code version."""
+    """Results of one function's tasks on disk, for this code version, each entry
+    ENTRY_MAGIC, its HMAC (key: cache_key()) and the pickled result."""
 
     def __init__(self, cache_dir: Path, function: Callable) -> None:
         self.function = pickle.dumps(function, protocol=PICKLE_PROTOCOL)  # by reference
         self.folder = Path(cache_dir) / code_version(function)
+        self.key = cache_key()
 
     def path(self, task: Any) -> Path:
         digest = hashlib.sha256(self.function)
@@ -276,19 +304,92 @@ class TaskCache:
         return self.folder / f"{digest.hexdigest()}.pkl"
 
     def load(self, task: Any) -> tuple[bool, Any]:
-        """(True, the cached result) or (False, None)."""
+        """(True, the cached result) or (False, None): none there, or one that fails its
+        check or does not load (said once, by name: it is recomputed)."""
+        path = self.path(task)
         try:
-            return True, pickle.loads(self.path(task).read_bytes())
+            entry = path.read_bytes()
         except FileNotFoundError:
+            return False, None
+        header = len(ENTRY_MAGIC) + ENTRY_TAG_BYTES
+        payload = entry[header:]
+        if entry[:len(ENTRY_MAGIC)] != ENTRY_MAGIC or not hmac.compare_digest(
+                entry[len(ENTRY_MAGIC):header], self._tag(path, payload)):
+            _log.warning("cache entry %s fails its check (not written with your key, or "
+                         "changed since): recomputed", path)
+            return False, None
+        try:
+            return True, pickle.loads(payload)
+        except Exception as error:  # signed by us, yet unreadable: a library moved on
+            _log.warning("cache entry %s does not load (%s): recomputed", path, error)
             return False, None
 
     def store(self, task: Any, result: Any) -> None:
         """Written whole or not at all (a temporary file renamed)."""
         path = self.path(task)
         path.parent.mkdir(parents=True, exist_ok=True)
+        payload = pickle.dumps(result, protocol=PICKLE_PROTOCOL)
         temporary = path.with_suffix(f".{os.getpid()}.tmp")
-        temporary.write_bytes(pickle.dumps(result, protocol=PICKLE_PROTOCOL))
+        temporary.write_bytes(ENTRY_MAGIC + self._tag(path, payload) + payload)
         temporary.replace(path)
+
+    def _tag(self, path: Path, payload: bytes) -> bytes:
+        """The HMAC of an entry: its name too, so that no entry stands in for another."""
+        return hmac.new(self.key, path.name.encode() + b"\0" + payload, "sha256").digest()
+
+
+ENTRY_MAGIC = b"uavfd-cache-1\n"
+ENTRY_TAG_BYTES = 32  # HMAC-SHA256
+CACHE_KEY_BYTES = 32
+
+
+def cache_key_path() -> Path:
+    """The user's cache key: $XDG_CONFIG_HOME (default ~/.config)/uav_fault_diagnostics/
+    cache.key."""
+    config = os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config"
+    return Path(config) / "uav_fault_diagnostics" / "cache.key"
+
+
+def cache_key() -> bytes:
+    """The user's cache key, made at first use (CACHE_KEY_BYTES random bytes, mode 0600).
+    A key others may read is no secret: it is replaced by a new one (said once; entries
+    written with the old one are recomputed)."""
+    path = cache_key_path()
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        return _new_cache_key(path)
+    if mode & (stat.S_IRWXG | stat.S_IRWXO):
+        _log.warning("cache key %s was open to others (mode %o): replaced by a new one",
+                     path, stat.S_IMODE(mode))
+        path.unlink()
+        return _new_cache_key(path)
+    key = path.read_bytes()
+    return key if len(key) == CACHE_KEY_BYTES else _replace_cache_key(path)
+
+
+def _replace_cache_key(path: Path) -> bytes:
+    _log.warning("cache key %s is not a key: replaced by a new one", path)
+    path.unlink()
+    return _new_cache_key(path)
+
+
+def _new_cache_key(path: Path) -> bytes:
+    """A new key at path, mode 0600 from its creation and whole when it appears (linked
+    from a temporary file); the key another process put there first, if one did."""
+    path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+    temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+    key = secrets.token_bytes(CACHE_KEY_BYTES)
+    descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(descriptor, "wb") as file:
+        file.write(key)
+    try:
+        os.link(temporary, path)
+    except FileExistsError:
+        key = path.read_bytes()
+    finally:
+        temporary.unlink()
+    return key
 
 
 def code_version(function: Callable) -> str:
@@ -311,13 +412,21 @@ def code_version(function: Callable) -> str:
 
 
 def add_campaign_arguments(parser: argparse.ArgumentParser) -> None:
-    """--workers, --cluster, --cache, --no-progress for a script that runs a campaign."""
+    """--workers, --cluster, --tls-certs, --insecure-cluster, --cache, --no-progress for a
+    script that runs a campaign."""
     group = parser.add_argument_group("where the flights run (Dask)")
     group.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                        help="local worker processes (default: the cores, %(default)s; 0: in "
                             "this process, one after the other)")
-    group.add_argument("--cluster", metavar="tcp://HOST:8786",
-                       help="a running Dask scheduler to send the tasks to instead")
+    group.add_argument("--cluster", metavar="tls://HOST:8786",
+                       help="a running Dask scheduler to send the tasks to instead (tcp:// "
+                            "only on this machine)")
+    group.add_argument("--tls-certs", type=Path, metavar="DIR",
+                       help="the cluster's certificates (scripts/cluster_certs.py), for a "
+                            "tls:// --cluster")
+    group.add_argument("--insecure-cluster", action="store_true",
+                       help="allow a plain tcp:// --cluster on another machine: anyone who "
+                            "can reach its scheduler can run code on its workers")
     group.add_argument("--cache", type=Path, metavar="DIR",
                        help="keep each task's result here, keyed by its inputs and the "
                             "code's version: a rerun computes only what is missing")
@@ -326,8 +435,14 @@ def add_campaign_arguments(parser: argparse.ArgumentParser) -> None:
 
 def campaign_options(args: argparse.Namespace) -> CampaignOptions:
     """The options add_campaign_arguments' arguments give; ValueError for a negative
-    --workers."""
+    --workers, ClusterAddressError (a ValueError) for a cluster cluster_access refuses,
+    before anything connects."""
     if args.workers < 0:
         raise ValueError(f"--workers {args.workers}: 0 or more")
+    if args.cluster is not None:
+        cluster_access(args.cluster, args.tls_certs, args.insecure_cluster)
+    elif args.tls_certs is not None or args.insecure_cluster:
+        raise ClusterAddressError("--tls-certs and --insecure-cluster go with --cluster")
     return CampaignOptions(workers=args.workers, cluster=args.cluster, cache_dir=args.cache,
-                           progress=not args.no_progress)
+                           progress=not args.no_progress, tls_certs=args.tls_certs,
+                           insecure_cluster=args.insecure_cluster)
