@@ -10,23 +10,31 @@ Flights: the shipped default and fault_free scenarios in turn, each in a wind of
 the offline chain, the estimator on it, summarised by its fault metrics. Per-task cost: a
 task that returns its input, run warm (after a first round) through Campaign on two workers
 and through a two-process ProcessPoolExecutor (spawned), wall time per task; the cluster's
-start-up apart. The plan scales the measured seconds per flight, result size and worker
-memory to 10,000 flights.
+start-up apart. The same through a scheduler address, as --cluster reaches one: a local
+cluster of two workers on 127.0.0.1 over plain TCP and over TLS (certificates of
+cluster_security.make_certificates), and TLS_FLIGHTS of the flights over TLS, whose results
+must equal the serial run's bit for bit (as JSON: each float's repr is exact). The plan scales the measured seconds per
+flight, result size and worker memory to 10,000 flights.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import logging
 import multiprocessing
 import os
 import pickle
 import resource
+import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from uav_fault_estimator.campaigns import Campaign, CampaignOptions
+import dask.config
+from distributed import LocalCluster
+from uav_fault_estimator.campaigns import LOCALHOST, QUIET_WORKERS, Campaign, CampaignOptions
+from uav_fault_estimator.cluster_security import ROLES, make_certificates, security
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_fault_estimator.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.reporting.metrics import fault_metrics
@@ -35,6 +43,7 @@ from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 WORKERS = 2
 MAP_FLIGHTS = 10_000
 FIRST_SEED = 401  # other seeds than the calibrations' (101-112, 201-212, 301-304)
+TLS_FLIGHTS = 6
 
 
 def benchmark_flights(count: int) -> list[Scenario]:
@@ -82,7 +91,40 @@ def flights_serial_and_parallel(count: int) -> dict:
             "parallel_s": parallel_s, "cluster_startup_s": startup_s,
             "speedup": serial_s / parallel_s, "seconds_per_flight": serial_s / count,
             "result_bytes_mean": sum(result_bytes) / count,
-            "worker_memory_mb_largest": memory_mb, "equal_results": True}
+            "worker_memory_mb_largest": memory_mb, "equal_results": True,
+            "serial_results": serial.results}
+
+
+def tls_against_tcp(tasks: int, scenarios: list[Scenario], serial_results: list) -> dict:
+    """Wall time per cheapest task [ms], warm, through a local cluster's address over plain
+    TCP and over TLS; and the scenarios flown over TLS, their results compared with the
+    serial run's bit for bit (JSON of each: a float's repr is the shortest that reads back
+    as the same double)."""
+    items = list(range(tasks))
+    figures = {}
+    with tempfile.TemporaryDirectory() as folder, dask.config.set(QUIET_WORKERS):
+        certificates = Path(folder)
+        make_certificates(certificates)
+        for protocol in ("tcp", "tls"):
+            tls = protocol == "tls"
+            with LocalCluster(n_workers=WORKERS, threads_per_worker=1, processes=True,
+                              host=LOCALHOST, protocol=f"{protocol}://",
+                              security=security(certificates, ROLES) if tls else None,
+                              dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+                options = CampaignOptions(cluster=cluster.scheduler_address, progress=False,
+                                          tls_certs=certificates if tls else None)
+                with Campaign(options) as campaign:
+                    campaign.run(echo, items, "warm-up")
+                    started = time.perf_counter()
+                    campaign.run(echo, items, "timed")
+                    figures[f"{protocol}_ms_per_task"] = (
+                        1e3 * (time.perf_counter() - started) / tasks)
+                    if tls:
+                        flown = campaign.results(flight_figures, scenarios, "over TLS")
+    equal = [json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+             for a, b in zip(flown, serial_results, strict=True)]
+    return {"tasks": tasks, **figures, "tls_flights": len(scenarios),
+            "tls_flights_equal_serial": all(equal)}
 
 
 def per_task_cost(tasks: int) -> dict:
@@ -126,9 +168,17 @@ def main() -> None:
           f"{measured['seconds_per_flight']:.2f} s per flight, result "
           f"{measured['result_bytes_mean']:.0f} B, worker memory up to "
           f"{measured['worker_memory_mb_largest']:.0f} MB", flush=True)
+    serial_results = measured.pop("serial_results")
     cost = per_task_cost(arguments.tiny_tasks)
     print(f"per task, warm: Dask {cost['dask_ms_per_task']:.2f} ms, process pool "
           f"{cost['process_pool_ms_per_task']:.2f} ms", flush=True)
+    flights = min(TLS_FLIGHTS, arguments.flights)
+    cluster = tls_against_tcp(arguments.tiny_tasks, benchmark_flights(arguments.flights)[
+        :flights], serial_results[:flights])
+    print(f"per task through a scheduler's address, warm: TCP "
+          f"{cluster['tcp_ms_per_task']:.2f} ms, TLS {cluster['tls_ms_per_task']:.2f} ms; "
+          f"{flights} flights over TLS equal to the serial run: "
+          f"{cluster['tls_flights_equal_serial']}", flush=True)
     plans = [plan(measured, workers) for workers in (os.cpu_count() or 1, 64)]
     for entry in plans:
         print(f"{entry['flights']} flights: {entry['cpu_hours']:.1f} CPU hours, "
@@ -136,7 +186,8 @@ def main() -> None:
               f"{entry['worker_memory_mb']:.0f} MB; results {entry['results_mb']:.1f} MB")
     if arguments.json:
         arguments.json.write_text(json.dumps({"flights": measured, "per_task": cost,
-                                              "plans": plans}, indent=2) + "\n")
+                                              "cluster": cluster, "plans": plans},
+                                             indent=2) + "\n")
 
 
 if __name__ == "__main__":

@@ -235,9 +235,15 @@ def campaigns(data: Mapping[str, Any]) -> list[str]:
                    [(flown["serial_s"], flown["parallel_s"], flown["cluster_startup_s"],
                      flown["speedup"], flown["seconds_per_flight"], flown["result_bytes_mean"],
                      flown["worker_memory_mb_largest"])])
+    cluster = data["cluster"]
     lines += [f"Per task, warm, over {cost['tasks']} tasks that return their input: Dask "
               f"{number(cost['dask_ms_per_task'])} ms, a process pool "
-              f"{number(cost['process_pool_ms_per_task'])} ms.", "",
+              f"{number(cost['process_pool_ms_per_task'])} ms. Through a scheduler's address "
+              f"(2 local workers on 127.0.0.1, as `--cluster` reaches one): plain TCP "
+              f"{number(cluster['tcp_ms_per_task'])} ms, TLS "
+              f"{number(cluster['tls_ms_per_task'])} ms; {cluster['tls_flights']} of the "
+              f"flights over TLS equal to the serial run bit for bit: "
+              f"{number(cluster['tls_flights_equal_serial'])}.", "",
               "A 10,000-flight detectability map, scaled from the flights above:", ""]
     return lines + table(("flights (tasks)", "CPU hours", "workers", "wall hours",
                           "memory per worker [MB]", "results [MB]"),

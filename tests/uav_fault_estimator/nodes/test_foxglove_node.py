@@ -3,8 +3,10 @@ with their ros2msg schemas and receives a published FaultEstimate unchanged (CDR
 server listens on 127.0.0.1 alone and stops on SIGINT. The client reads and sets the graph's
 parameters (a live one taken by its node, a read-only one refused, unchanged, with the
 node's reason as a status), hears of changes made with `ros2 param set`, and is sent the
-simulation time; a node that does not answer costs a request no more than the timeout. Its
-core, LiveView, refuses a type it cannot describe and speaks foxglove.sdk.v1 alone."""
+simulation time; a node that does not answer costs a request no more than the timeout. The
+clients offer both subprotocols, as Lichtblick from 1.22 does. Setting parameters follows
+allow_parameter_set (off: refused with a status, nothing set). Its core, LiveView, refuses
+a type it cannot describe and speaks foxglove.sdk.v1 alone."""
 
 from __future__ import annotations
 
@@ -28,9 +30,11 @@ from uav_common.package_data import default_parameters
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_estimator.live_view import (
+    SET_REFUSED,
     SUBPROTOCOL,
     LiveView,
     parameter_name,
+    parameter_set_allowed,
     split_parameter_name,
 )
 from uav_fault_estimator.recording.project_bag import project_typestore
@@ -46,6 +50,8 @@ TIME_MESSAGE = struct.Struct("<BQ")  # opcode, time [ns]
 RATE = "/sim_node.real_time_factor"  # live
 SENSOR_RATE = "/sim_node.sensor_rate_hz"  # read-only
 SUBSCRIPTION_ID = 7
+# What Lichtblick 1.22 offers: both names (older viewers offer the first alone: refused)
+VIEWER_SUBPROTOCOLS = ["foxglove.websocket.v1", SUBPROTOCOL]
 SEPARATOR = "=" * 80  # between a ros2msg definition and each nested type's
 POLL_S = 0.05  # pause between two requests asked again until the graph has what they need [s]
 REQUEST_TIMEOUT_S = 10.0  # longest wait for the answer to one Foxglove request [s]
@@ -176,7 +182,7 @@ def test_a_client_receives_a_published_estimate_from_a_loopback_server(start_pro
         # the default host: loopback alone (port 0: the one the system chose)
         [(address, port)] = listening_tcp(node.pid)
         assert address == "127.0.0.1"
-        with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=VIEWER_SUBPROTOCOLS,
                      open_timeout=10) as client:
             server_info = json.loads(client.recv(timeout=10))
             channel = channel_of(client, TOPIC, timeout_s=10)
@@ -261,7 +267,7 @@ def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
     node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
         "-p", "port:=0", "-p", "use_sim_time:=true"]), "foxglove_node")
     port = listening_port(node.pid, timeout_s=30)
-    with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
+    with connect(f"ws://127.0.0.1:{port}", subprotocols=VIEWER_SUBPROTOCOLS,
                  open_timeout=10) as client:
         server_info = next_op(client, "serverInfo", timeout_s=10)
         assert {"parameters", "parametersSubscribe", "time"} <= set(
@@ -316,7 +322,8 @@ def test_a_client_reads_and_sets_parameters_and_follows_the_simulation_time(
 def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_process, graph):
     timeout_s = 0.5
     node = start_process(ros2_run_argv("uav_fault_estimator", "foxglove_node", ros_args=[
-        "-p", "port:=0", "-p", f"parameter_timeout_s:={timeout_s}"]), "foxglove_node")
+        "-p", "port:=0", "-p", f"parameter_timeout_s:={timeout_s}",
+        "-p", "allow_parameter_set:=never"]), "foxglove_node")
     # A node of the test's, its parameter services served (by a thread of the test's) until
     # foxglove_node has discovered it, then by nobody: its requests wait for ever. Served
     # first because foxglove_node answers for the nodes it has discovered so far: a request
@@ -336,7 +343,7 @@ def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_pro
     server.start()
     try:
         port = listening_port(node.pid, timeout_s=30)
-        with connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL],
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=VIEWER_SUBPROTOCOLS,
                      open_timeout=10) as client:
             ask = {"op": "getParameters", "parameterNames": [], "id": "all"}
             values = values_once_discovered(
@@ -349,8 +356,15 @@ def test_a_node_that_does_not_answer_costs_a_request_the_timeout_alone(start_pro
             started = time.monotonic()
             values, _ = parameters(client, ask, timeout_s=10)
             took_s = time.monotonic() - started
+            # allow_parameter_set never: a set is refused with a status, nothing set
+            refused, statuses = parameters(client, {
+                "op": "setParameters", "id": "set", "parameters": [
+                    {"name": "/foxglove_node.discovery_period_s", "value": 1.0,
+                     "type": "float64"}]}, timeout_s=10)
         assert values["/foxglove_node.port"] == 0
         assert not any(name.startswith("/silent_node.") for name in values)
+        assert refused == {"/foxglove_node.discovery_period_s": 0.2}
+        assert statuses == [SET_REFUSED]
         # listing waits timeout_s for the silent node; getting asks the others alone
         assert timeout_s <= took_s < 2 * timeout_s, took_s
         print(f"a request with a silent node took {took_s:.2f} s")
@@ -387,3 +401,51 @@ def test_the_server_speaks_foxglove_sdk_v1_alone():
         assert server_info["capabilities"] == []
     finally:
         view.close()
+
+
+class FixedStore:
+    """A ParameterStore of fixed values that records the sets asked of it."""
+
+    def __init__(self, values: dict) -> None:
+        self.values, self.sets = dict(values), []
+
+    def get(self, names: list[str]) -> dict:
+        return {name: value for name, value in self.values.items() if not names or name in names}
+
+    def set(self, values: dict) -> tuple[dict, list[str]]:
+        self.sets.append(values)
+        self.values.update(values)
+        return {name: self.values[name] for name in values}, []
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("policy", ["never", "always"])
+def test_a_set_is_refused_with_a_status_when_off_and_taken_when_on(policy):
+    store = FixedStore({RATE: 1.0})
+    view = LiveView(project_typestore(), "127.0.0.1", 0, name="test", parameters=store,
+                    parameter_set=policy)
+    try:
+        with connect(view.url, subprotocols=VIEWER_SUBPROTOCOLS, open_timeout=10) as client:
+            values, statuses = parameters(client, {"op": "setParameters", "id": "set",
+                                                   "parameters": [{"name": RATE, "value": 4.0,
+                                                                   "type": "float64"}]},
+                                          timeout_s=10)
+    finally:
+        view.close()
+    if policy == "never":
+        assert (values, statuses, store.sets) == ({RATE: 1.0}, [SET_REFUSED], [])
+    else:
+        assert (values, statuses, store.sets) == ({RATE: 4.0}, [], [{RATE: 4.0}])
+
+
+@pytest.mark.timeout(30)
+def test_sets_are_allowed_by_default_on_loopback_alone():
+    assert default_parameters("uav_fault_estimator", "foxglove_node.yaml")[
+        "allow_parameter_set"] == "loopback_only"
+    for host, allowed in (("127.0.0.1", True), ("::1", True), ("localhost", True),
+                          ("0.0.0.0", False), ("10.0.0.1", False), ("viewer.lan", False)):
+        assert parameter_set_allowed(host, "loopback_only") == allowed, host
+        assert parameter_set_allowed(host, "always") and not parameter_set_allowed(host,
+                                                                                  "never")
+    with pytest.raises(ValueError, match="one of loopback_only, always, never"):
+        parameter_set_allowed("127.0.0.1", "sometimes")

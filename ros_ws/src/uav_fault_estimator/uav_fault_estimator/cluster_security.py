@@ -26,12 +26,12 @@ from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 from distributed.comm.addressing import parse_address, parse_host_port
 from distributed.security import Security
+from uav_common.loopback import is_loopback
 
 ROLES = ("scheduler", "worker", "client")
 CA_CERTIFICATE = "ca.pem"
 CA_KEY = "ca-key.pem"  # signs new certificates; need not leave the machine that made it
 VALID_DAYS = 365
-LOOPBACK_NAMES = ("localhost",)
 INSECURE_WARNING = ("the Dask cluster at {address} is plain TCP off this machine: anyone "
                     "who can reach it can run code on its workers (use tls:// and "
                     "--tls-certs; docs/security.md)")
@@ -93,18 +93,21 @@ def make_certificates(folder: Path, hosts: Sequence[str] = ("127.0.0.1", "localh
     return written
 
 
-def security(folder: Path, role: str = "client") -> Security:
-    """Dask's Security for one role (ROLES) from a certificates folder: TLS required, the
-    folder's CA the only one trusted. ClusterAddressError naming a file that is missing."""
-    missing = [path for path in (Path(folder) / CA_CERTIFICATE, certificate_path(folder, role),
-                                 key_path(folder, role)) if not path.is_file()]
+def security(folder: Path, roles: Sequence[str] = ("client",)) -> Security:
+    """Dask's Security for some of ROLES (one process may be all three: a LocalCluster)
+    from a certificates folder: TLS required, the folder's CA the only one trusted.
+    ClusterAddressError naming the files that are missing."""
+    folder = Path(folder)
+    files = {"tls_ca_file": folder / CA_CERTIFICATE}
+    for role in roles:
+        files |= {f"tls_{role}_cert": certificate_path(folder, role),
+                  f"tls_{role}_key": key_path(folder, role)}
+    missing = [str(path) for path in files.values() if not path.is_file()]
     if missing:
-        raise ClusterAddressError(f"--tls-certs {folder}: no {', '.join(map(str, missing))} "
+        raise ClusterAddressError(f"--tls-certs {folder}: no {', '.join(missing)} "
                                   "(scripts/cluster_certs.py makes them)")
-    files = {"tls_ca_file": str(Path(folder) / CA_CERTIFICATE),
-             f"tls_{role}_cert": str(certificate_path(folder, role)),
-             f"tls_{role}_key": str(key_path(folder, role))}
-    return Security(require_encryption=True, **files)
+    return Security(require_encryption=True,
+                    **{option: str(path) for option, path in files.items()})
 
 
 @dataclass(frozen=True)
@@ -144,17 +147,6 @@ def cluster_access(address: str, tls_certs: Path | None = None,
             f"--cluster {address}: plain TCP to another machine lets anyone who reaches it "
             "run code on the workers; use tls:// with --tls-certs (or --insecure-cluster)")
     return ClusterAccess(address, None, insecure=off_machine)
-
-
-def is_loopback(host: str) -> bool:
-    """Whether a host (an address, or a name) is this machine's loopback, without resolving
-    it: loopback addresses and LOOPBACK_NAMES only."""
-    if host in LOOPBACK_NAMES:
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def _builder(subject: x509.Name, issuer: x509.Name, public_key: ec.EllipticCurvePublicKey,

@@ -7,7 +7,10 @@ the project's rosbags type store, so Foxglove decodes the project's own messages
 
 With a ParameterStore the server has the parameters capability: Foxglove reads and sets the
 graph's parameters by the names foxglove_bridge gives them, the node's fully qualified name,
-'.', the parameter (`/sim_node.real_time_factor`). With sim_time it has the time capability:
+'.', the parameter (`/sim_node.real_time_factor`). The protocol has no authentication: who
+reaches the port is served, so setting is a policy (PARAMETER_SET_POLICIES,
+parameter_set_allowed), by default allowed on a loopback address only; a refused set is
+answered with the values unchanged and an error status. With sim_time it has the time capability:
 the view broadcasts its clock (broadcast_time), which Foxglove's timeline follows.
 
 The server (foxglove-sdk 0.30) speaks the subprotocol `foxglove.sdk.v1` alone: a client
@@ -31,9 +34,23 @@ from foxglove.websocket import (
     WebSocketServer,
 )
 from rosbags.typesys.store import Typestore
+from uav_common.loopback import is_loopback
 
 ROS2MSG, CDR = "ros2msg", "cdr"  # schema and message encodings of a ROS 2 channel
 SUBPROTOCOL = "foxglove.sdk.v1"  # the one subprotocol foxglove-sdk 0.30's server accepts
+# Who may set parameters: clients of a server on a loopback address only, every client, or
+# none (read only).
+PARAMETER_SET_POLICIES = ("loopback_only", "always", "never")
+SET_REFUSED = "setting parameters is off on this server (foxglove_node's allow_parameter_set)"
+
+
+def parameter_set_allowed(host: str, policy: str) -> bool:
+    """Whether clients of a server listening on host may set parameters under policy
+    (PARAMETER_SET_POLICIES); ValueError for another policy."""
+    if policy not in PARAMETER_SET_POLICIES:
+        raise ValueError(f"allow_parameter_set {policy!r}: one of "
+                         f"{', '.join(PARAMETER_SET_POLICIES)}")
+    return policy == "always" or (policy == "loopback_only" and is_loopback(host))
 
 
 def ros2msg_schema(typestore: Typestore, message_type: str) -> str:
@@ -108,11 +125,13 @@ def foxglove_parameters(values: dict[str, Any]) -> list[Parameter]:
 
 class ViewListener(SubscribedClients):
     """SubscribedClients that also answers Foxglove's parameter requests from a store (none:
-    no parameters). A refused set goes to the clients as a warning status."""
+    no parameters); sets only when settable. A refused set goes to the clients as a status
+    (a node's refusal a warning, the server's an error)."""
 
-    def __init__(self, parameters: ParameterStore | None) -> None:
+    def __init__(self, parameters: ParameterStore | None, settable: bool = True) -> None:
         super().__init__()
         self.parameters = parameters
+        self.settable = settable
         self.server: WebSocketServer | None = None  # set once started: for statuses
 
     def on_get_parameters(self, client: Client, param_names: list[str],
@@ -124,31 +143,43 @@ class ViewListener(SubscribedClients):
 
     def on_set_parameters(self, client: Client, parameters: list[Parameter],
                           request_id: str | None = None) -> list[Parameter]:
-        """Each parameter set on its node; the values the nodes hold afterwards."""
+        """Each parameter set on its node; the values the nodes hold afterwards. Not
+        settable: nothing set, the values as they are, and SET_REFUSED as an error."""
         if self.parameters is None:
             return []
+        names = [parameter.name for parameter in parameters]
+        if not self.settable:
+            self._status(SET_REFUSED, StatusLevel.Error)
+            return foxglove_parameters(self.parameters.get(names))
         values, refusals = self.parameters.set(
             {parameter.name: parameter.get_value() for parameter in parameters})
         for refusal in refusals:
-            if self.server is not None:
-                self.server.publish_status(refusal, StatusLevel.Warning)
+            self._status(refusal, StatusLevel.Warning)
         return foxglove_parameters(values)
+
+    def _status(self, message: str, level: StatusLevel) -> None:
+        if self.server is not None:
+            self.server.publish_status(message, level)
 
 
 class LiveView:
     """A running Foxglove WebSocket server on host:port (port 0: one the system chooses);
     topics are added as they appear, messages logged raw. The server, its channels and its
     clients belong to this view alone (a foxglove Context of its own). parameters: the
-    store Foxglove reads and sets parameters in (None: no parameters capability); sim_time:
-    advertise the time capability, the clients then following broadcast_time.
+    store Foxglove reads and sets parameters in (None: no parameters capability),
+    parameter_set who may set them (PARAMETER_SET_POLICIES; settable tells the outcome);
+    sim_time: advertise the time capability, the clients then following broadcast_time.
 
-    RuntimeError (foxglove's, naming the cause) when the server cannot listen there."""
+    RuntimeError (foxglove's, naming the cause) when the server cannot listen there;
+    ValueError for an unknown policy."""
 
     def __init__(self, typestore: Typestore, host: str, port: int, name: str,
-                 parameters: ParameterStore | None = None, sim_time: bool = False) -> None:
+                 parameters: ParameterStore | None = None, sim_time: bool = False,
+                 parameter_set: str = "loopback_only") -> None:
         self.typestore = typestore
+        self.settable = parameter_set_allowed(host, parameter_set)
         self.context = foxglove.Context()
-        self.clients = ViewListener(parameters)
+        self.clients = ViewListener(parameters, self.settable)
         capabilities = ([Capability.Parameters] if parameters is not None else []) + (
             [Capability.Time] if sim_time else [])
         self.server = foxglove.start_server(name=name, host=host, port=port,
