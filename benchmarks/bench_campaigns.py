@@ -13,8 +13,8 @@ and through a two-process ProcessPoolExecutor (spawned), wall time per task; the
 start-up apart. The same through a scheduler address, as --cluster reaches one: a local
 cluster of two workers on 127.0.0.1 over plain TCP and over TLS (certificates of
 cluster_security.make_certificates), and TLS_FLIGHTS of the flights over TLS, whose results
-must equal the serial run's bit for bit (as JSON: each float's repr is exact). The plan scales the measured seconds per
-flight, result size and worker memory to 10,000 flights.
+must equal the serial run's bit for bit (as JSON: each float's repr is exact). The plan
+scales the measured seconds per flight, result size and worker memory to 10,000 flights.
 """
 
 from __future__ import annotations
