@@ -14,7 +14,7 @@ import pytest
 SOURCE = Path(__file__).resolve().parent.parent / "ros_ws" / "src"
 # import name -> rosdep key, where they differ
 ROSDEP_KEYS = {"numpy": "python3-numpy", "yaml": "python3-yaml", "scipy": "python3-scipy",
-               "matplotlib": "python3-matplotlib"}
+               "matplotlib": "python3-matplotlib", "cryptography": "python3-cryptography"}
 
 
 def imported(package: str) -> set[str]:

@@ -1,12 +1,17 @@
 """The input gates: a glitch inside the envelope is told by its rate, and the shipped
-flight never is."""
+flights never are; each vehicle's measured state stays inside the envelope."""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pytest
 from uav_common.channels import STATE_CHANNELS
-from uav_common.envelope import STATE_RATE_BOUNDS, state_rate_gate
+from uav_common.envelope import STATE_LIMITS, STATE_RATE_BOUNDS, gate, state_rate_gate
+from uav_sim.scenario import load_scenario
+from uav_sim.simulation import Simulation
+from uav_sim.vehicles import load_vehicle, vehicle_names
 
 NORTH = STATE_CHANNELS.index("velocity_north")
 ROLL_RATE = STATE_CHANNELS.index("roll_rate")
@@ -46,3 +51,17 @@ def test_a_one_sample_glitch_is_one_missing_value_and_a_real_step_passes_soon():
     assert out[11][0][NORTH] == 25.0 and out[21][0][ROLL_RATE] == 8.0
     gate.reset()
     assert gate(0.0, state)[1] == 0  # after a restart, time going back is no glitch
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("vehicle", vehicle_names())
+def test_each_vehicles_measured_state_stays_inside_the_envelope(vehicle):
+    """20 s of its default flight with sensor noise: no value taken as implausible (the
+    Carbon-Z carries no fuel: its gauge reads 0, not noise about it)."""
+    scenario = load_scenario(load_vehicle(vehicle).default_scenario)
+    simulation = Simulation(dataclasses.replace(scenario, duration_s=20.0))
+    outside, sample = 0, simulation.sample()
+    while not simulation.finished:
+        outside += gate(sample.state, STATE_LIMITS)[1]
+        sample = simulation.step()
+    assert outside == 0

@@ -103,15 +103,19 @@ def test_a_dropout_invalidates_the_rows_that_need_the_channel_then_recovers() ->
 
 @pytest.mark.timeout(30)
 def test_a_gap_of_up_to_four_samples_is_bridged_and_a_longer_one_is_a_loss() -> None:
-    """Velocity lost from 20.0 s: for 4 samples (0.2 s, BRIDGED_GAP_S) the samples are
-    skipped and every row stays valid, the residuals within 1e-3 m/s^2 of the run without
-    the gap (of about 1: F_a's one step over the gap instead of four) and fading with F_a;
-    for 5 the rows that need it are invalid until recovery_s after it is back."""
+    """Velocity lost from 20.0 s: for 4 samples (0.2 s, BRIDGED_GAP_S) each gives the last
+    complete sample's residuals, every row valid, and after the gap the residuals are
+    within 1e-3 m/s^2 of the run without it (of about 1: F_a's one step over the gap
+    instead of four) and fading with F_a; for 5 the rows that need it are invalid until
+    recovery_s after it is back. A missing channel no row needs (fuel) is held, not
+    bridged."""
     clean = {round(s.time_s, 2): s for s in fly(generator(), [10.0, 5.0], 30.0)
              if s is not None}
     bridged = fly(generator(), [10.0, 5.0], 30.0, dropout=("velocity_north", 20.0, 20.19))
     by_time = {round(s.time_s, 2): s for s in bridged if s is not None}
-    assert sorted(set(clean) - set(by_time)) == [20.0, 20.05, 20.1, 20.15]
+    assert sorted(by_time) == sorted(clean)
+    for t in (20.0, 20.05, 20.1, 20.15):
+        np.testing.assert_array_equal(by_time[t].residual, clean[19.95].residual)
     assert all(sample.valid.all() for t, sample in by_time.items() if t >= TAU_A_S * 3)
     moved = max(float(np.abs(sample.residual - clean[t].residual).max())
                 for t, sample in by_time.items() if t >= 20.2)
@@ -121,8 +125,11 @@ def test_a_gap_of_up_to_four_samples_is_bridged_and_a_longer_one_is_a_loss() -> 
     lost = fly(generator(recovery_s=5.0), [10.0, 5.0], 30.0,
                dropout=("velocity_north", 20.0, 20.24))
     lost_at = {round(s.time_s, 2): s for s in lost if s is not None}
-    assert not lost_at[20.2].valid[0] and not lost_at[25.2].valid[0]
-    assert lost_at[25.25].valid.all()
+    assert lost_at[20.15].valid.all() and not lost_at[20.2].valid[0]
+    assert not lost_at[25.2].valid[0] and lost_at[25.25].valid.all()
+    held = fly(generator(), [10.0, 5.0], 30.0, dropout=("fuel_mass", 20.0, 20.1))
+    assert all(np.array_equal(s.residual, clean[round(s.time_s, 2)].residual)
+               for s in held if s is not None)
 
 
 @pytest.mark.timeout(30)

@@ -102,6 +102,9 @@ class ChannelErrors:
         return self.bias + self.markov_error + self.white * white
 
 
+_FUEL_MASS = STATE_CHANNELS.index("fuel_mass")
+
+
 def state_scale(latitude_rad: float) -> np.ndarray:
     """Unit conversion of STATE_NOISE to the state's units: GNSS metres to radians of
     latitude and longitude; 1 for every other channel."""
@@ -136,7 +139,11 @@ class SensorModel:
             air_data = biased_air_data(air_data, self.air_data_bias)
         if not self.noise:
             return state, controls, air_data
-        return (state + self.state_errors.next(), controls + self.control_errors.next(),
+        measured = state + self.state_errors.next()
+        # a gauge reads no less than empty: an aircraft without fuel (electric) reads 0,
+        # not noise around it (half of it negative: outside the envelope, a lost value)
+        measured[_FUEL_MASS] = max(measured[_FUEL_MASS], 0.0)
+        return (measured, controls + self.control_errors.next(),
                 air_data + self.air_data_errors.next())
 
 

@@ -65,13 +65,6 @@ ATTITUDE = state_indices("roll", "pitch", "yaw")
 # mean mass too low (measured: lift residual biased by 0.36 of its noise deviation on
 # fault-free flights). Fuel burns at 0.11 g/s: 30 s lag it by 3 g.
 FUEL_MASS_TAU_S = 30.0
-# A gap in the inputs this short [s] (a glitch the input gate took out: up to four samples
-# at 20 Hz) is bridged: the samples in it are skipped whole and the next complete one's
-# velocity difference spans the gap, which is exact (a mean acceleration over a longer
-# interval), so the filters and every row go on as if nothing were lost. Longer, the
-# inputs are missing: their last good values held, the rows that need them invalid until
-# recovery_s after they are back.
-BRIDGED_GAP_S = 0.2
 
 _AIR_DATA = ("velocity_north", "velocity_east", "velocity_down", "roll", "pitch", "yaw")
 # The state channels each residual row cannot do without: its observed derivative, the
@@ -89,6 +82,15 @@ ROW_NEEDS: tuple[frozenset[str], ...] = (
     frozenset({*_EVERY_ROW, "pitch_rate"}),
     frozenset({*_EVERY_ROW, "yaw_rate", "roll_rate"}),
 )
+# A gap this short [s] in what the rows need (a glitch the input gate took out: up to four
+# samples at 20 Hz) is bridged: its samples leave the filters alone and give the last
+# complete sample's residuals (at most BRIDGED_GAP_S old, against F_a's seconds), and the
+# next complete sample's velocity difference spans the gap, which is exact (a mean
+# acceleration over a longer interval): no row goes invalid. Longer, the inputs are
+# missing: their last good values held, the rows that need them invalid until recovery_s
+# after they are back.
+BRIDGED_GAP_S = 0.2
+_NEEDED = frozenset().union(*ROW_NEEDS)
 
 
 # Where the models' wind came from (Residuals.WIND_FILTERED, Residuals.WIND_AIR_DATA).
@@ -145,7 +147,8 @@ class ResidualGenerator:
     Sensitivities are recomputed every sensitivity_period_s and held in between. A row is
     invalid for recovery_s after the start, while a channel it needs is missing, and for
     recovery_s after the channel is back: the time its filters take to settle; a gap of at
-    most BRIDGED_GAP_S is bridged instead (no row invalid, no filter disturbed).
+    most BRIDGED_GAP_S is bridged instead (no row invalid, no filter disturbed). Channels
+    no row needs (position, fuel) are held while missing.
     """
 
     def __init__(
@@ -206,8 +209,9 @@ class ResidualGenerator:
         self.observed_filter.reset()
         self.predicted_filter.reset()
         self.fuel_filter.reset()
-        self.last_time_s: float | None = None
-        self.last_complete = False  # the last sample taken had every input
+        self.last_time_s: float | None = None  # the last sample the filters took
+        self.newest_time_s: float | None = None  # the last sample taken, bridged ones too
+        self.last_complete = False  # the last sample taken had every needed input
         self.last_velocity: np.ndarray | None = None
         self.last_prediction: np.ndarray | None = None
         self.held_state = np.full(len(STATE_CHANNELS), np.nan)
@@ -265,18 +269,21 @@ class ResidualGenerator:
 
         air_data (3,): measured true airspeed [m/s], alpha, beta [rad], or None; when usable
         (air_data_usable) the models fly it instead of the filtered wind wind_ned_mps.
-        Returns None too for a sample skipped within a bridged gap (BRIDGED_GAP_S).
+        Within a bridged gap (BRIDGED_GAP_S) the residuals are the last complete sample's,
+        stamped time_s.
         Raises ValueError for a time that does not increase (call reset() first), and for a sample
         the models cannot evaluate (the model copies are then rebuilt).
         """
-        if self.last_time_s is not None and time_s <= self.last_time_s:
-            raise ValueError(f"time {time_s} s does not follow {self.last_time_s} s: reset first")
+        if self.newest_time_s is not None and time_s <= self.newest_time_s:
+            raise ValueError(f"time {time_s} s does not follow {self.newest_time_s} s: "
+                             "reset first")
         finite = np.isfinite(state)
         missing = {name for name, ok in zip(STATE_CHANNELS, finite, strict=True) if not ok}
         missing |= {name for name, value in (("controls", controls), ("wind", wind_ned_mps))
                     if not np.all(np.isfinite(value))}
-        if missing and self._bridges(time_s):
-            return None
+        if missing & _NEEDED and self._bridges(time_s):
+            self._filtered_fuel_kg(time_s, np.where(finite, state, self.held_state)[FUEL_MASS])
+            return dataclasses.replace(self.latest, time_s=time_s)
         self.held_state = np.where(finite, state, self.held_state)
         for name, value in (("controls", controls), ("wind", wind_ned_mps)):
             if name not in missing:
@@ -284,8 +291,7 @@ class ResidualGenerator:
         if not np.all(np.isfinite(self.held_state)) or len(self.held_inputs) < 2:
             return None  # some input never seen yet: nothing can be predicted
         state = self.held_state.copy()
-        state[FUEL_MASS] = self.fuel_filter.update(
-            state[FUEL_MASS], 0.0 if self.last_time_s is None else time_s - self.last_time_s)
+        state[FUEL_MASS] = self._filtered_fuel_kg(time_s, state[FUEL_MASS])
         wind, self.wind_source = self.held_inputs["wind"], WIND_FILTERED
         if air_data_usable(air_data, self.air_data_range):
             wind = _air_data_wind(state, air_data, self.sensor_bias)
@@ -310,14 +316,21 @@ class ResidualGenerator:
             self.predicted_filter.update(predicted_mean, dt_s)
             self.latest = self._sample(time_s, state, valid)
         self.last_time_s, self.last_velocity, self.last_prediction = time_s, velocity, prediction
-        self.last_complete = not missing
+        self.last_complete = not missing & _NEEDED
         return self.latest
 
+    def _filtered_fuel_kg(self, time_s: float, fuel_kg: float) -> float:
+        """The fuel gauge's reading [kg] through its filter, fed every sample the generator
+        takes, bridged ones too (so a bridged gap leaves it as it would have been)."""
+        elapsed_s = 0.0 if self.newest_time_s is None else time_s - self.newest_time_s
+        self.newest_time_s = time_s
+        return self.fuel_filter.update(fuel_kg, elapsed_s)
+
     def _bridges(self, time_s: float) -> bool:
-        """Whether a sample with a missing input at time_s [s] falls in a bridged gap: the
-        last sample taken, BRIDGED_GAP_S ago or less, had every input (a gap begun earlier
-        is a loss, and is not bridged from its middle)."""
-        return (self.last_time_s is not None and self.last_complete
+        """Whether a sample missing a needed input at time_s [s] falls in a bridged gap: the
+        last sample taken, BRIDGED_GAP_S ago or less, gave residuals and had every needed
+        input (a gap begun earlier is a loss, and is not bridged from its middle)."""
+        return (self.latest is not None and self.last_complete
                 and time_s - self.last_time_s <= BRIDGED_GAP_S + GRID_TOLERANCE_S)
 
     def _sample(self, time_s: float, state: np.ndarray, valid: np.ndarray) -> ResidualSample:
