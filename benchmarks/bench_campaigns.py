@@ -70,9 +70,9 @@ def peak_memory_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3
 
 
-def flights_serial_and_parallel(count: int) -> dict:
-    """count benchmark flights in this process and on WORKERS local workers; the two
-    results must be equal (the campaign layer's promise)."""
+def flights_serial_and_parallel(count: int) -> tuple[dict, list]:
+    """count benchmark flights in this process and on WORKERS local workers, the two
+    results equal (the campaign layer's promise): the figures, and the serial results."""
     scenarios = benchmark_flights(count)
     started = time.perf_counter()
     serial = Campaign(CampaignOptions(workers=0, progress=False)).run(
@@ -91,8 +91,7 @@ def flights_serial_and_parallel(count: int) -> dict:
             "parallel_s": parallel_s, "cluster_startup_s": startup_s,
             "speedup": serial_s / parallel_s, "seconds_per_flight": serial_s / count,
             "result_bytes_mean": sum(result_bytes) / count,
-            "worker_memory_mb_largest": memory_mb, "equal_results": True,
-            "serial_results": serial.results}
+            "worker_memory_mb_largest": memory_mb, "equal_results": True}, serial.results
 
 
 def tls_against_tcp(tasks: int, scenarios: list[Scenario], serial_results: list) -> dict:
@@ -100,7 +99,6 @@ def tls_against_tcp(tasks: int, scenarios: list[Scenario], serial_results: list)
     TCP and over TLS; and the scenarios flown over TLS, their results compared with the
     serial run's bit for bit (JSON of each: a float's repr is the shortest that reads back
     as the same double)."""
-    items = list(range(tasks))
     figures = {}
     with tempfile.TemporaryDirectory() as folder, dask.config.set(QUIET_WORKERS):
         certificates = Path(folder)
@@ -114,11 +112,7 @@ def tls_against_tcp(tasks: int, scenarios: list[Scenario], serial_results: list)
                 options = CampaignOptions(cluster=cluster.scheduler_address, progress=False,
                                           tls_certs=certificates if tls else None)
                 with Campaign(options) as campaign:
-                    campaign.run(echo, items, "warm-up")
-                    started = time.perf_counter()
-                    campaign.run(echo, items, "timed")
-                    figures[f"{protocol}_ms_per_task"] = (
-                        1e3 * (time.perf_counter() - started) / tasks)
+                    figures[f"{protocol}_ms_per_task"] = warm_ms_per_task(campaign, tasks)
                     if tls:
                         flown = campaign.results(flight_figures, scenarios, "over TLS")
     equal = [json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
@@ -127,22 +121,29 @@ def tls_against_tcp(tasks: int, scenarios: list[Scenario], serial_results: list)
             "tls_flights_equal_serial": all(equal)}
 
 
+def warm_ms_per_task(campaign: Campaign, tasks: int) -> float:
+    """Wall time per cheapest task [ms] of tasks run through the campaign after as many to
+    warm it."""
+    items = list(range(tasks))
+    campaign.run(echo, items, "warm-up")
+    started = time.perf_counter()
+    campaign.run(echo, items, "timed")
+    return 1e3 * (time.perf_counter() - started) / tasks
+
+
 def per_task_cost(tasks: int) -> dict:
     """Wall time per cheapest task [ms], warm: Dask on WORKERS workers against a process
     pool of as many."""
     items = list(range(tasks))
     with Campaign(CampaignOptions(workers=WORKERS, progress=False)) as campaign:
-        campaign.run(echo, items, "warm-up")
-        started = time.perf_counter()
-        campaign.run(echo, items, "timed")
-        dask_s = time.perf_counter() - started
+        dask_ms = warm_ms_per_task(campaign, tasks)
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=WORKERS, mp_context=context) as pool:
         list(pool.map(echo, items))
         started = time.perf_counter()
         list(pool.map(echo, items))
         pool_s = time.perf_counter() - started
-    return {"tasks": tasks, "dask_ms_per_task": 1e3 * dask_s / tasks,
+    return {"tasks": tasks, "dask_ms_per_task": dask_ms,
             "process_pool_ms_per_task": 1e3 * pool_s / tasks}
 
 
@@ -161,14 +162,13 @@ def main() -> None:
     parser.add_argument("--tiny-tasks", type=int, default=400)
     parser.add_argument("--json", type=Path, help="write the figures here")
     arguments = parser.parse_args()
-    measured = flights_serial_and_parallel(arguments.flights)
+    measured, serial_results = flights_serial_and_parallel(arguments.flights)
     print(f"{measured['flights']} flights: serial {measured['serial_s']:.1f} s, "
           f"{WORKERS} workers {measured['parallel_s']:.1f} s (cluster start-up "
           f"{measured['cluster_startup_s']:.1f} s): {measured['speedup']:.2f} times faster; "
           f"{measured['seconds_per_flight']:.2f} s per flight, result "
           f"{measured['result_bytes_mean']:.0f} B, worker memory up to "
           f"{measured['worker_memory_mb_largest']:.0f} MB", flush=True)
-    serial_results = measured.pop("serial_results")
     cost = per_task_cost(arguments.tiny_tasks)
     print(f"per task, warm: Dask {cost['dask_ms_per_task']:.2f} ms, process pool "
           f"{cost['process_pool_ms_per_task']:.2f} ms", flush=True)

@@ -352,24 +352,20 @@ def cache_key_path() -> Path:
 
 def cache_key() -> bytes:
     """The user's cache key, made at first use (CACHE_KEY_BYTES random bytes, mode 0600).
-    A key others may read is no secret: it is replaced by a new one (said once; entries
-    written with the old one are recomputed)."""
+    A key others may read is no secret, and a file of another size no key: either is
+    replaced by a new one (said once; entries written with the old one are recomputed)."""
     path = cache_key_path()
     try:
         mode = path.stat().st_mode
     except FileNotFoundError:
         return _new_cache_key(path)
     if mode & (stat.S_IRWXG | stat.S_IRWXO):
-        _log.warning("cache key %s was open to others (mode %o): replaced by a new one",
-                     path, stat.S_IMODE(mode))
-        path.unlink()
-        return _new_cache_key(path)
-    key = path.read_bytes()
-    return key if len(key) == CACHE_KEY_BYTES else _replace_cache_key(path)
-
-
-def _replace_cache_key(path: Path) -> bytes:
-    _log.warning("cache key %s is not a key: replaced by a new one", path)
+        problem = f"was open to others (mode {stat.S_IMODE(mode):o})"
+    elif len(key := path.read_bytes()) == CACHE_KEY_BYTES:
+        return key
+    else:
+        problem = "is not a key"
+    _log.warning("cache key %s %s: replaced by a new one", path, problem)
     path.unlink()
     return _new_cache_key(path)
 
