@@ -33,10 +33,15 @@ from pathlib import Path
 
 import dask.config
 from distributed import LocalCluster
-from uav_fault_estimator.campaigns import LOCALHOST, QUIET_WORKERS, Campaign, CampaignOptions
-from uav_fault_estimator.cluster_security import ROLES, make_certificates, security
+from uav_fault_estimator.campaigns.campaign import (
+    LOCALHOST,
+    QUIET_WORKERS,
+    Campaign,
+    CampaignOptions,
+)
+from uav_fault_estimator.campaigns.cluster_security import ROLES, make_certificates, security
+from uav_fault_estimator.chain.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
-from uav_fault_estimator.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 

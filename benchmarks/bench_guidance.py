@@ -27,15 +27,15 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
-from uav_fault_estimator.offline import fly_and_estimate
 from uav_sim.guidance import route_errors
 from uav_sim.mpc_guidance import MpcGuidance
 from uav_sim.paths import scenarios_dir

@@ -44,6 +44,7 @@ import numpy as np
 from proxsuite import proxqp
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.chain.offline import PACKAGE
 from uav_fault_estimator.estimation.estimator_config import (
     EstimatorConfig,
     config_from_parameters,
@@ -53,7 +54,6 @@ from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.reference_solution import ClarabelSolver, solve_reference
-from uav_fault_estimator.offline import PACKAGE
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation

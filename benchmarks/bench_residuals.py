@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.chain.offline import PACKAGE
 from uav_fault_estimator.estimation.prediction import residual_generator
-from uav_fault_estimator.offline import PACKAGE
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 

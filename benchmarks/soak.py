@@ -4,7 +4,7 @@
     python -m benchmarks.soak [--duration 1800] [--seed 1] [--json FILE]
 
 The default scenario, flown by the core simulator for --duration seconds of sim time, is
-replayed (uav_sim/flight_replay.py) into two copies of residual_node, mhe_node and
+replayed (uav_sim/ros/flight_replay.py) into two copies of residual_node, mhe_node and
 detector_node, one in /clean and one in /dirty, on a ROS domain of its own. The /dirty copy
 gets, every 20-60 s of sim time at random (seeded), one of: a velocity of 1e200 for 2 s or
 of 1e6 m/s for 0.5 s, body rates of 1e6 rad/s for 0.5 s, a NaN or an Inf for 1 s, a
@@ -39,7 +39,7 @@ from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import RosProcess, reserve_domain_id, ros2_run_argv, stop_all
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_fault_msgs.msg import FaultEstimate, Residuals
-from uav_sim.flight_replay import FlightSample, Replayer, simulated_flight
+from uav_sim.ros.flight_replay import FlightSample, Replayer, simulated_flight
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 CLEAN, DIRTY = "/clean", "/dirty"

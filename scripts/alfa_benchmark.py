@@ -43,14 +43,15 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from uav_common.package_data import config_path, default_parameters
-from uav_fault_estimator.campaigns import (
+from uav_aircraft.vehicles import load_vehicle
+from uav_common.package_data import default_parameters
+from uav_fault_estimator.campaigns.campaign import (
     CampaignOptions,
     add_campaign_arguments,
     campaign_options,
     run_campaign,
 )
-from uav_fault_estimator.cluster_security import ClusterAddressError
+from uav_fault_estimator.campaigns.cluster_security import ClusterAddressError
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
@@ -93,7 +94,7 @@ ALFA_GENERATORS = ("roll_tracking", "pitch_tracking", "climb_tracking", "lateral
 # flight lasts 29.9 s: 30 s of settling would never test it.
 ALFA_FORGETTING_FACTOR = 0.95
 ALFA_SETTLE_S = 15.0
-DEFAULT_AIRFRAME = config_path("uav_fault_estimator", "airframes/carbon_z_alfa.yaml")
+DEFAULT_AIRFRAME = load_vehicle("carbon_z").airframe_files["carbon_z_alfa"]
 
 
 class BadInputError(Exception):

@@ -83,7 +83,7 @@ export ROS_LOG_DIR="$logs"
 declare -A pids=()        # by node key: <vehicle>/<node>, or <node> alone
 declare -A simulators=()  # the keys of the sim_nodes still flying
 
-# The graph (uav_fault_estimator.node_graph): a line per node in start order, KEY PACKAGE
+# The graph (uav_fault_estimator.chain.node_graph): a line per node in start order, KEY PACKAGE
 # EXECUTABLE and its ROS arguments, quoted for the shell.
 plan_args=()
 [ -n "$ns" ] && plan_args+=(--ns "$ns")
@@ -92,7 +92,7 @@ for scenario in "${scenarios[@]}"; do plan_args+=(--scenario "$scenario"); done
 # a model calibration is checked there, for each scenario's vehicle: one line, no node started
 [ -n "$model_calibration" ] && plan_args+=(--model-calibration "$model_calibration")
 [ -n "$foxglove" ] && plan_args+=(--foxglove)
-plan="$(python -m uav_fault_estimator.node_graph --caller bringup.sh "${plan_args[@]}")" || exit 2
+plan="$(python -m uav_fault_estimator.chain.node_graph --caller bringup.sh "${plan_args[@]}")" || exit 2
 
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:
 # a background job of a script starts with SIGINT ignored, and would keep it ignored.

@@ -24,14 +24,21 @@ import sys
 import time
 from pathlib import Path
 
+from uav_aircraft.paths import calibration_output_path
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, DETECTOR_CALIBRATION_FILE, vehicle_names
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.calibration_output import write_calibration
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
+)
+from uav_fault_estimator.chain.calibration_output import write_calibration
+from uav_fault_estimator.chain.offline import (
+    describe_flights,
+    fault_free_flights,
+    fly_on_grid_each,
 )
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
@@ -41,15 +48,8 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
-from uav_fault_estimator.offline import (
-    describe_flights,
-    fault_free_flights,
-    fly_on_grid_each,
-)
 from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
-from uav_sim.vehicles import DEFAULT_VEHICLE, DETECTOR_CALIBRATION_FILE, vehicle_names
 
-AIRCRAFT = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_sim/aircraft"
 FIRST_SEED = 101
 
 
@@ -87,7 +87,7 @@ def main() -> int:
                         help="comma-separated (detection/generators.py; default roll,pitch,yaw)")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
-    out = arguments.out or AIRCRAFT / arguments.vehicle / DETECTOR_CALIBRATION_FILE
+    out = arguments.out or calibration_output_path(arguments.vehicle, DETECTOR_CALIBRATION_FILE)
     node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     started = time.monotonic()
     try:

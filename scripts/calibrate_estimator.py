@@ -21,23 +21,23 @@ import sys
 import time
 from pathlib import Path
 
-from uav_fault_estimator.calibration_output import write_calibration
-from uav_fault_estimator.campaigns import (
+from uav_aircraft.paths import calibration_output_path
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, NOISE_FILE, vehicle_names
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD, SUITES, fit_noise
-from uav_fault_estimator.offline import (
+from uav_fault_estimator.chain.calibration_output import write_calibration
+from uav_fault_estimator.chain.offline import (
     describe_flights,
     fault_free_flights,
     fault_free_residuals,
 )
+from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD, SUITES, fit_noise
 from uav_sim.scenario import SensorSuite
-from uav_sim.vehicles import DEFAULT_VEHICLE, NOISE_FILE, vehicle_names
 
-AIRCRAFT = Path(__file__).resolve().parent.parent / "ros_ws/src/uav_sim/aircraft"
 FIRST_SEED = 301
 
 
@@ -62,9 +62,9 @@ def main() -> int:
     header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
               f"flights per sensor suite of\n# {describe_flights(base)}.\n"
               "# Valid for residual_node's default parameters.\n")
-    write_calibration(arguments.out or AIRCRAFT / arguments.vehicle / NOISE_FILE, header,
-                      calibration.to_dict(arguments.vehicle), f"{count} flights per suite",
-                      time.monotonic() - started)
+    out = arguments.out or calibration_output_path(arguments.vehicle, NOISE_FILE)
+    write_calibration(out, header, calibration.to_dict(arguments.vehicle),
+                      f"{count} flights per suite", time.monotonic() - started)
     return 0
 
 

@@ -39,14 +39,16 @@ import sys
 import time
 from pathlib import Path
 
+from uav_aircraft.flown_aircraft import NOMINAL
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.calibration_output import write_calibration
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.estimation.calibration_check import check_calibration
 from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
 from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
@@ -57,8 +59,6 @@ from uav_fault_estimator.recording.project_bag import (
     project_typestore,
     sensor_flight_from_recording,
 )
-from uav_sim.flown_aircraft import NOMINAL
-from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 
 INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
 

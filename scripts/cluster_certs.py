@@ -25,7 +25,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from uav_fault_estimator.cluster_security import VALID_DAYS, make_certificates
+from uav_fault_estimator.campaigns.cluster_security import VALID_DAYS, make_certificates
 
 
 def main() -> int:

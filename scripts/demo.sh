@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job: fly a scenario through the nodes, record every topic, report.
-#   ./scripts/demo.sh [SCENARIO.yaml] [--out DIR]      (uav_fault_estimator.demo_run does the work)
+#   ./scripts/demo.sh [SCENARIO.yaml] [--out DIR]      (uav_fault_estimator.chain.demo_run does the work)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # set up if needed; its closing "ready" note would only be noise here

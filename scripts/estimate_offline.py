@@ -6,10 +6,10 @@ table (no recording, no figures).
     python scripts/estimate_offline.py [SCENARIO.yaml] [--turbulence LEVEL] [--true-wind]
                                        [--json FILE]
 
-The same numbers the ROS graph gives for the same scenario (tests/nodes/test_demo.py checks
-that), in a few seconds; for tuning and for comparing turbulence levels. --true-wind gives
-the models the true wind instead of the 10 s filtered one: what perfect wind knowledge
-would buy.
+The same numbers the ROS graph gives for the same scenario
+(tests/uav_fault_estimator/chain/test_demo_run.py checks that), in a few seconds; for
+tuning and for comparing turbulence levels. --true-wind gives the models the true wind
+instead of the 10 s filtered one: what perfect wind knowledge would buy.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-from uav_fault_estimator.offline import fly_and_estimate
+from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.reporting import report
 from uav_sim.scenario import (
     TURBULENCE_LEVELS,

@@ -55,15 +55,16 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
 
+from uav_aircraft.airframe import Airframe, load_airframe
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.calibration_output import write_calibration
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     CampaignOptions,
     add_campaign_arguments,
     campaign_options,
     run_campaign,
 )
-from uav_fault_estimator.cluster_security import ClusterAddressError
+from uav_fault_estimator.campaigns.cluster_security import ClusterAddressError
+from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
@@ -73,7 +74,6 @@ from uav_fault_estimator.detection.calibration_file import calibration_to_dict, 
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
-from uav_fault_estimator.flight_logs.airframe import Airframe, load_airframe
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
 from uav_fault_estimator.flight_logs.evaluation import (
     ALFA_DETECTION_LIMIT_S,

@@ -25,16 +25,16 @@ import time
 from pathlib import Path
 
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.chain.offline import fly_on_grid_each
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
-from uav_fault_estimator.offline import fly_on_grid_each
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 

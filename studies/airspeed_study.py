@@ -10,6 +10,7 @@ import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
+from uav_fault_estimator.chain.offline import fault_free_flights
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
@@ -18,7 +19,6 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
-from uav_fault_estimator.offline import fault_free_flights
 from uav_sim.scenario import Scenario
 
 # The tests whose rates are measured, in the order of rates()' values.

@@ -40,14 +40,16 @@ from pathlib import Path
 from statistics import NormalDist
 
 import numpy as np
+from uav_aircraft.vehicles import vehicle_names
 from uav_common.channels import ACTUATOR_FAULT_NAMES
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.chain.offline import GridFlight, fault_free_flights, fly_on_grid_each
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
@@ -58,9 +60,7 @@ from uav_fault_estimator.detection.calibration_file import (
     shipped_calibration_path,
 )
 from uav_fault_estimator.detection.detector import RegressionFeed, flight_samples, run_detector
-from uav_fault_estimator.offline import GridFlight, fault_free_flights, fly_on_grid_each
 from uav_sim.scenario import ACTUATOR_FAULT_PCT, Scenario, SeededFault
-from uav_sim.vehicles import vehicle_names
 
 FIRST_SEED = 501  # other seeds than the calibrations' (101-112, 301-304) and the studies'
 ONSET_RANGE_S = (60.0, 120.0)

@@ -24,7 +24,7 @@ altitude, 390-398 m: it only sets the air density, 1 % per 100 m), the fuel (non
 (none), mixture and ignition (on), the rudder (0: the autopilot mixes it from the aileron,
 an unknown sign), and the motor's speed, which no topic logs: the propeller's steady speed
 at the logged throttle and the air-relative speed the wind estimate gives
-(uav_sim.propeller.steady_rpm).
+(uav_aircraft.propeller.steady_rpm).
 """
 
 from __future__ import annotations
@@ -37,26 +37,25 @@ import time
 from pathlib import Path
 
 import numpy as np
+from uav_aircraft.airframe import load_airframe
+from uav_aircraft.fdm import EFFECTIVE_THROTTLE, KG_PER_M3_PER_SLUG_PER_FT3, M_PER_FT, create_fdm
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
+from uav_aircraft.propeller import Propeller
+from uav_aircraft.vehicles import load_vehicle, vehicle_names
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
-from uav_common.package_data import config_path, default_parameters
+from uav_common.package_data import default_parameters
 from uav_fault_estimator.estimation.model_calibration import SensorFlight, calibrate
 from uav_fault_estimator.estimation.model_parameters import AIR_DATA_BIASES, DEFAULT_PARAMETERS
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import LINEAR, detector_samples, resample
 from uav_fault_estimator.flight_logs.streams import WIND
-from uav_sim.aircraft import EFFECTIVE_THROTTLE, KG_PER_M3_PER_SLUG_PER_FT3, M_PER_FT, create_fdm
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
-from uav_sim.propeller import Propeller
-from uav_sim.vehicles import load_vehicle, vehicle_names
 
 GRID_S = 0.2
 FIELD_LATITUDE_DEG, FIELD_LONGITUDE_DEG = 40.44, -79.94
 ALTITUDE_M = 390.0
-AIRFRAME = "airframes/carbon_z_alfa.yaml"
 PARAMETERS = tuple(name for name in DEFAULT_PARAMETERS if name not in AIR_DATA_BIASES)
 FILTERED = "filtered_wind"
 _STATE = {name: k for k, name in enumerate(STATE_CHANNELS)}
@@ -72,8 +71,8 @@ def sensor_flight(folder: Path, vehicle: str) -> SensorFlight:
     """The log on the grid as a model calibration reads a flight, the gaps filled as the
     module says."""
     log = read_log(folder)
-    inputs = detector_samples(log, load_airframe(config_path("uav_fault_estimator", AIRFRAME)),
-                              GRID_S)
+    airframe = load_airframe(load_vehicle("carbon_z").airframe_files["carbon_z_alfa"])
+    inputs = detector_samples(log, airframe, GRID_S)
     times_s, state, controls = inputs.times_s, inputs.state.copy(), inputs.controls.copy()
     state[:, _STATE["latitude"]] = math.radians(FIELD_LATITUDE_DEG)
     state[:, _STATE["longitude"]] = math.radians(FIELD_LONGITUDE_DEG)

@@ -25,8 +25,8 @@ import sys
 import time
 
 import numpy as np
-from uav_fault_estimator.campaigns import Campaign, campaign_options, exit_on_failed_tasks
-from uav_sim.flown_aircraft import NOMINAL
+from uav_aircraft.flown_aircraft import NOMINAL
+from uav_fault_estimator.campaigns.campaign import Campaign, campaign_options, exit_on_failed_tasks
 from uav_sim.scenario import Scenario
 
 from studies.random_aircraft import (

@@ -7,7 +7,7 @@ For each sensor suite (the paper's 10 s filtered wind only; air data on board) a
 turbulence (none, from_wind, light, moderate), flies `--seeds` variants of the shipped
 default and fault_free scenarios (turbulence and noise seeds from 401, background winds of
 5-6 m/s towards directions 360/seeds degrees apart) through the offline chain
-(uav_fault_estimator.offline: the nodes' default parameters, the calibrated noise of the
+(uav_fault_estimator.chain.offline: the nodes' default parameters, the calibrated noise of the
 suite) and prints, per fault:
 
 - fault-free: the largest estimate after settle_s over all flights, i.e. the smallest
@@ -30,16 +30,16 @@ from pathlib import Path
 
 import numpy as np
 from uav_common.channels import PAPER_FAULT_NAMES
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.chain.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD
-from uav_fault_estimator.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import Scenario, SensorSuite, default_scenario_path, load_scenario
 

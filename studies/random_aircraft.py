@@ -9,7 +9,7 @@ aircraft) from the scenario `aircraft:` block's parameters, each uniform within 
 mass +-5 %, inertia about each axis +-10 %, CG +-2 cm per axis, thrust +-5 %, every one of
 aerosonde.xml's aerodynamic coefficients +-15 %, the pitot's scale +-3 %, the vanes' biases
 +-0.6 deg; plus the model's own aircraft (`model`, every parameter nominal). Each aircraft,
-through the offline chain (uav_fault_estimator.offline), as studies/model_error.py does it
+through the offline chain (uav_fault_estimator.chain.offline), as studies/model_error.py does it
 through the graph: three fault-free calibration flights (model_error.CALIBRATION_FLIGHTS:
 22, 25 and 28 m/s, winds of 5-6 m/s from three directions; seeds 501-503 for the model's own
 aircraft, plus SEED_STRIDE times its number for a drawn one, so that no two aircraft share
@@ -32,13 +32,16 @@ import time
 from pathlib import Path
 
 import numpy as np
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
+from uav_fault_estimator.chain.offline import fly_and_estimate, sensor_flight, wind_variant
 from uav_fault_estimator.estimation.calibration_check import check_calibration
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
@@ -49,11 +52,8 @@ from uav_fault_estimator.estimation.model_calibration import (
 )
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
-from uav_fault_estimator.offline import fly_and_estimate, sensor_flight, wind_variant
 from uav_fault_estimator.reporting.metrics import fault_metrics
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_sim.scenario import Scenario, SetpointChange, default_scenario_path, load_scenario
-from uav_sim.vehicles import load_vehicle
 
 from studies.model_error import CALIBRATION_FLIGHTS
 

@@ -17,7 +17,7 @@ from helpers.flights import fly
 from helpers.started_processes import started_processes
 from uav_common.ros.graph_probe import RosGraph
 from uav_common.ros_processes import reserve_domain_id
-from uav_fault_estimator.campaigns import Campaign, CampaignOptions
+from uav_fault_estimator.campaigns.campaign import Campaign, CampaignOptions
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Sample
 

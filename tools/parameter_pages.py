@@ -27,7 +27,7 @@ from typing import Any
 
 import yaml
 from uav_common.ros.parameters import ParameterSpec
-from uav_fault_estimator.node_graph import PACKAGES
+from uav_fault_estimator.chain.node_graph import PACKAGES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 END = "<!-- end of parameters -->"

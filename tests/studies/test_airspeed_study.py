@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 import yaml
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.chain.offline import fly_on_grid_each
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.calibration_file import (
     calibration_to_dict,
@@ -27,7 +28,6 @@ from uav_fault_estimator.detection.calibration_file import (
 )
 from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
-from uav_fault_estimator.offline import fly_on_grid_each
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 

@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 import pytest
+from uav_fault_estimator.chain.offline import GridFlight
 from uav_fault_estimator.detection.calibration import Calibration, ChannelCalibration
 from uav_fault_estimator.detection.change_detection import Weibull
-from uav_fault_estimator.offline import GridFlight
 
 from studies.alfa_kinds import FAULT_FREE, REQUIRED_SNR, flights, signal_to_noise, twin
 

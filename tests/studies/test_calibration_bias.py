@@ -4,7 +4,7 @@ the study's: docs/results.md)."""
 from __future__ import annotations
 
 import pytest
-from uav_sim.flown_aircraft import NOMINAL
+from uav_aircraft.flown_aircraft import NOMINAL
 
 from studies.calibration_bias import CONDITIONS, flights_in, summary
 from studies.random_aircraft import calibration_scenarios

@@ -7,8 +7,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from uav_sim.flown_aircraft import NOMINAL, coefficient_names
-from uav_sim.vehicles import load_vehicle
+from uav_aircraft.flown_aircraft import NOMINAL, coefficient_names
+from uav_aircraft.vehicles import load_vehicle
 
 from studies.model_error import CALIBRATION_FLIGHTS
 from studies.random_aircraft import (

@@ -7,11 +7,11 @@ import dataclasses
 
 import numpy as np
 import pytest
+from uav_aircraft.vehicles import vehicle_names
 from uav_common.channels import STATE_CHANNELS
 from uav_common.envelope import STATE_LIMITS, STATE_RATE_BOUNDS, gate, state_rate_gate
-from uav_sim.scenario import load_scenario
+from uav_sim.scenario import load_scenario, vehicle_scenario_path
 from uav_sim.simulation import Simulation
-from uav_sim.vehicles import load_vehicle, vehicle_names
 
 NORTH = STATE_CHANNELS.index("velocity_north")
 ROLL_RATE = STATE_CHANNELS.index("roll_rate")
@@ -58,7 +58,7 @@ def test_a_one_sample_glitch_is_one_missing_value_and_a_real_step_passes_soon():
 def test_each_vehicles_measured_state_stays_inside_the_envelope(vehicle):
     """20 s of its default flight with sensor noise: no value taken as implausible (the
     Carbon-Z carries no fuel: its gauge reads 0, not noise about it)."""
-    scenario = load_scenario(load_vehicle(vehicle).default_scenario)
+    scenario = load_scenario(vehicle_scenario_path(vehicle, "default"))
     simulation = Simulation(dataclasses.replace(scenario, duration_s=20.0))
     outside, sample = 0, simulation.sample()
     while not simulation.finished:

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from uav_sim.frames import GRAVITY_MPS2
+from uav_aircraft.frames import GRAVITY_MPS2
 from uav_sim.guidance import route_errors
 from uav_sim.mpc_guidance import MpcGuidance, MpcSettings, prediction_matrices
 from uav_sim.paths import scenarios_dir

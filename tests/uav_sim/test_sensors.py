@@ -9,9 +9,9 @@ import hashlib
 import numpy as np
 import pytest
 from helpers.flights import column, fly
+from uav_aircraft.flown_aircraft import FlownAircraft, SensorBias
+from uav_aircraft.frames import wind_triangle_ned_mps
 from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
-from uav_sim.flown_aircraft import FlownAircraft, SensorBias
-from uav_sim.frames import wind_triangle_ned_mps
 from uav_sim.scenario import Guidance, SensorSuite
 from uav_sim.sensors import (
     AIR_DATA_NOISE,

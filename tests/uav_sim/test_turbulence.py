@@ -20,7 +20,7 @@ import pytest
 from helpers.flights import turbulence_met
 from scipy.linalg import solve_continuous_lyapunov
 from scipy.signal import welch
-from uav_sim.aircraft import M_PER_FT
+from uav_aircraft.fdm import M_PER_FT
 from uav_sim.turbulence import (
     VonKarmanTurbulence,
     milspec_scales,

@@ -18,7 +18,7 @@ setup(
         *[(f"share/{PACKAGE}/{folder}",
            [str(path.relative_to(HERE)) for path in sorted((HERE / folder).glob("*.*"))
             if path.suffix in (".yaml", ".json")])
-          for folder in ("config", "config/airframes")],
+          for folder in ("config",)],
     ],
     install_requires=["setuptools"],
     zip_safe=True,

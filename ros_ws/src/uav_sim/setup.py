@@ -1,4 +1,4 @@
-"""Build description of uav_sim: Python modules, aircraft folders, scenarios, config."""
+"""Build description of uav_sim: Python modules, scenarios, config."""
 
 from pathlib import Path
 
@@ -25,7 +25,6 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        *share_tree("aircraft"),
         *share_tree("scenarios"),
         *share_tree("config"),
     ],

@@ -11,7 +11,7 @@ import stat
 from pathlib import Path
 
 import pytest
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     ENTRY_MAGIC,
     CampaignOptions,
     TaskCache,

@@ -10,14 +10,14 @@ import sys
 import cloudpickle
 import numpy as np
 import pytest
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
     TaskCache,
     exit_on_failed_tasks,
     run_campaign,
 )
-from uav_fault_estimator.offline import GridFlight, fly_on_grid
+from uav_fault_estimator.chain.offline import GridFlight, fly_on_grid
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 # workers import this module's functions by value: it is not on their path

@@ -21,14 +21,14 @@ import pytest
 from distributed import Client
 from distributed.comm.core import CommClosedError
 from uav_common.ros_processes import wait_until
-from uav_fault_estimator.campaigns import Campaign, CampaignOptions
-from uav_fault_estimator.cluster_security import (
+from uav_fault_estimator.campaigns.campaign import Campaign, CampaignOptions
+from uav_fault_estimator.campaigns.cluster_security import (
     CA_CERTIFICATE,
     certificate_path,
     key_path,
     security,
 )
-from uav_fault_estimator.offline import fly_on_grid
+from uav_fault_estimator.chain.offline import fly_on_grid
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 pytestmark = pytest.mark.integration

@@ -11,15 +11,15 @@ import stat
 
 import pytest
 from cryptography import x509
-from uav_fault_estimator import campaigns
-from uav_fault_estimator.campaigns import (
+from uav_fault_estimator.campaigns import campaign as campaigns
+from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.cluster_security import (
+from uav_fault_estimator.campaigns.cluster_security import (
     CA_CERTIFICATE,
     CA_KEY,
     ROLES,

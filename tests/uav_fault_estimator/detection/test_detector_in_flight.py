@@ -21,12 +21,12 @@ import yaml
 from helpers.nested import assert_same_numbers
 from helpers.repo import REPO_ROOT
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.chain.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
 from uav_fault_estimator.detection.calibration import Calibration
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
-from uav_fault_estimator.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 
@@ -54,7 +54,7 @@ def test_the_shipped_calibration_is_what_the_command_makes(tmp_path):
     out = tmp_path / "calibration.yaml"
     subprocess.run([sys.executable, str(REPO_ROOT / "scripts/calibrate_detector.py"),
                     "--out", str(out)], check=True, timeout=170)
-    shipped = REPO_ROOT / "ros_ws/src/uav_sim/aircraft/aerosonde/detector_calibration.yaml"
+    shipped = REPO_ROOT / "ros_ws/src/uav_aircraft/aircraft/aerosonde/detector_calibration.yaml"
     assert_same_numbers(yaml.safe_load(out.read_text()), yaml.safe_load(shipped.read_text()))
 
 

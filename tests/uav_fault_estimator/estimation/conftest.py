@@ -7,11 +7,11 @@ from collections.abc import Callable
 
 import pytest
 from helpers.flights import calm, fly
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_fault_estimator.estimation.prediction import aircraft_predictor_factory
 from uav_fault_estimator.estimation.residuals import ResidualGenerator, ResidualSample
 from uav_sim.scenario import SeededFault, default_scenario_path, load_scenario
-from uav_sim.vehicles import load_vehicle
 
 # The default route in calm air for 90 s: 60 s straight, then the first turn.
 FLIGHT_S = 90.0

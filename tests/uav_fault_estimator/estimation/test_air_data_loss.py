@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from uav_common.channels import AIR_DATA_CHANNELS
 from uav_common.package_data import default_parameters
+from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
-from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import SensorDropout, default_scenario_path, load_scenario

@@ -14,9 +14,12 @@ import yaml
 from helpers.flights import calm
 from helpers.recordings import write_recording
 from helpers.repo import SCRIPTS
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import STATE_CHANNELS
 from uav_common.package_data import default_parameters
-from uav_fault_estimator.estimation.model_calibration import calibrate, model_file_sha256
+from uav_fault_estimator.chain.offline import sensor_flight
+from uav_fault_estimator.estimation.model_calibration import calibrate
 from uav_fault_estimator.estimation.model_file import (
     ModelCalibrationError,
     calibration_dict,
@@ -30,15 +33,12 @@ from uav_fault_estimator.estimation.model_parameters import (
     values_of,
 )
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
-from uav_fault_estimator.offline import sensor_flight
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,
     sensor_flight_from_recording,
 )
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
-from uav_sim.vehicles import load_vehicle
 
 # A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane, and its CG
 # 1.5 cm aft and 1 cm low, as measured on the ground
@@ -138,7 +138,7 @@ def test_the_calibration_file_gives_the_models_back(calibration, tmp_path):
 
 def write_calibration(path: Path, **changes) -> Path:
     entries = {"vehicle": "aerosonde", "model_file": "aerosonde.xml",
-               "model_sha256": model_file_sha256(AEROSONDE),
+               "model_sha256": AEROSONDE.model_sha256,
                "aircraft": {"coefficients": {"CDmin": 1.1}}, **changes}
     path.write_text(yaml.safe_dump(entries))
     return path

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from uav_aircraft.flown_aircraft import FlownAircraft, SensorBias, biased_air_data, true_air_data
+from uav_common.filters import SettlingLowPass
 from uav_fault_estimator.estimation.model_fit import (
     ASSESSING,
     DOES_NOT_FIT,
@@ -13,9 +15,6 @@ from uav_fault_estimator.estimation.model_fit import (
 )
 from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA
-from uav_sim.filters import SettlingLowPass
-from uav_sim.flown_aircraft import FlownAircraft, SensorBias
-from uav_sim.sensors import biased_air_data, true_air_data
 
 PERIOD_S = 0.5
 SIGMA = np.array([0.016, 0.015, 0.047, 0.18, 0.062, 0.019])  # about the shipped noise

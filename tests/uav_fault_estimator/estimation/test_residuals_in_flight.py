@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from helpers.flights import column
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_fault_estimator.estimation.prediction import aircraft_predictor_factory
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
-from uav_sim.vehicles import load_vehicle
 
 LINEAR_X, LINEAR_Z, ANGULAR_X, ANGULAR_Z = 0, 2, 3, 5
 

@@ -6,11 +6,10 @@ flight stays below the detection threshold."""
 from __future__ import annotations
 
 import pytest
+from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
-from uav_fault_estimator.offline import fly_and_estimate
 from uav_fault_estimator.reporting.metrics import fault_metrics
-from uav_sim.scenario import load_scenario
-from uav_sim.vehicles import load_vehicle
+from uav_sim.scenario import load_scenario, vehicle_scenario_path
 
 RMSE_SHARE = 0.15  # of each seeded magnitude
 DELAY_S = 10.0  # after the seeded value reaches the threshold
@@ -19,11 +18,10 @@ DELAY_S = 10.0  # after the seeded value reaches the threshold
 @pytest.mark.slow
 @pytest.mark.timeout(120)
 def test_the_carbon_z_meets_the_default_targets():
-    vehicle = load_vehicle("carbon_z")
-    faulted = load_scenario(vehicle.default_scenario)
+    faulted = load_scenario(vehicle_scenario_path("carbon_z", "default"))
     metrics, false_alarms = fault_metrics(*fly_and_estimate(faulted), SETTLE_S,
                                           DETECTION_THRESHOLD_PCT)
-    estimates, _ = fly_and_estimate(load_scenario(vehicle.fault_free_scenario))
+    estimates, _ = fly_and_estimate(load_scenario(vehicle_scenario_path("carbon_z", "fault_free")))
     largest_pct = estimates.values_pct[estimates.stamps_s >= SETTLE_S].max()
     for name, entry in metrics.items():
         print(f"{name}: {entry}")

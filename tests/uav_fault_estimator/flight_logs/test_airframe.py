@@ -11,16 +11,12 @@ import numpy as np
 import pytest
 import yaml
 from helpers.nested import edit
-from uav_common.package_data import config_path
-from uav_fault_estimator.flight_logs.airframe import (
-    AirframeError,
-    load_airframe,
-    mixed_output_mismatches,
-    surface_deflections,
-)
+from uav_aircraft.airframe import AirframeError, load_airframe
+from uav_aircraft.vehicles import load_vehicle
 from uav_fault_estimator.flight_logs.streams import OUTPUTS, FlightLog, TimedSeries
+from uav_fault_estimator.flight_logs.surfaces import mixed_output_mismatches, surface_deflections
 
-EXAMPLE = config_path("uav_fault_estimator", "airframes/aerosonde_sim.yaml")
+EXAMPLE = load_vehicle("aerosonde").airframe_files["aerosonde_sim"]
 # the airframe of the test logs written from simulated flights (tests/helpers/simulated_logs)
 FIXTURE = Path(__file__).parent / "fixture_airframe.yaml"
 

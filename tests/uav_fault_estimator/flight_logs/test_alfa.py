@@ -16,9 +16,10 @@ import numpy as np
 import pytest
 from helpers import simulated_logs
 from helpers.simulated_logs import ALFA, ROSTOPIC
+from uav_aircraft.airframe import load_airframe
+from uav_aircraft.frames import GRAVITY_MPS2
 from uav_fault_estimator.detection.detector import DetectorSample
 from uav_fault_estimator.detection.generators import GridSample, regressions
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.benchmark import (
     LabelledFlight,
     fault_free_part,
@@ -42,7 +43,6 @@ from uav_fault_estimator.flight_logs.ground_truth import (
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
 from uav_fault_estimator.flight_logs.streams import AIRSPEED, BODY_RATES
-from uav_sim.frames import GRAVITY_MPS2
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 

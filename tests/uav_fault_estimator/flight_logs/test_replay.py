@@ -12,8 +12,8 @@ import pytest
 import yaml
 from helpers import simulated_logs
 from helpers.simulated_logs import FIXTURE_AIRFRAME, ROSTOPIC
+from uav_aircraft.airframe import load_airframe
 from uav_common.channels import STATE_CHANNELS
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.replay import air_data_rows, load_replay
 from uav_fault_estimator.flight_logs.resample import detector_samples

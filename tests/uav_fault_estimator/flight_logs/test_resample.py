@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from uav_aircraft.airframe import load_airframe
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
-from uav_common.package_data import config_path
 from uav_common.sample_grid import on_grid
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import SelfTuningDetector
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.resample import (
     ANGULAR,
     GAP_FACTOR,
@@ -33,7 +33,7 @@ from uav_fault_estimator.flight_logs.streams import (
 )
 
 PERIOD_S = 0.2  # the shipped calibration's sample_period_s
-EXAMPLE_AIRFRAME = config_path("uav_fault_estimator", "airframes/aerosonde_sim.yaml")
+EXAMPLE_AIRFRAME = load_vehicle("aerosonde").airframe_files["aerosonde_sim"]
 
 
 def series(times_s, values, columns=("x",)) -> TimedSeries:

@@ -8,11 +8,11 @@ import dataclasses
 
 import pytest
 from helpers import simulated_logs
+from uav_aircraft.airframe import load_airframe
 from uav_common.package_data import default_parameters
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.calibration_file import load_calibration
 from uav_fault_estimator.detection.detector import run_detector
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
 from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s

@@ -15,7 +15,7 @@ import pytest
 import yaml
 from helpers import simulated_logs
 from helpers.repo import SCRIPTS
-from uav_common.package_data import config_path
+from uav_aircraft.vehicles import load_vehicle
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import Scenario, load_scenario
 
@@ -24,7 +24,7 @@ CALIBRATION_SPEEDS_MPS = (21.0, 25.0, 29.0)
 HELD_OUT_SPEED_MPS = 27.0
 FAULT_FREE_DURATION_S = 150.0  # 600 tested samples after the 30 s settling
 FIRST_SEED = 501
-OTHER_AIRFRAME = config_path("uav_fault_estimator", "airframes/aerosonde_sim.yaml")
+OTHER_AIRFRAME = load_vehicle("aerosonde").airframe_files["aerosonde_sim"]
 FAULT = load_scenario(scenarios_dir() / "aileron_loss.yaml")
 
 

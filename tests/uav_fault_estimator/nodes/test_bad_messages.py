@@ -16,8 +16,8 @@ from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import FaultAlarm, FaultEstimate, Residuals
-from uav_sim.flight_replay import FlightSample, Replayer, simulated_flight
-from uav_sim.flight_replay import message as simulated_message
+from uav_sim.ros.flight_replay import FlightSample, Replayer, simulated_flight
+from uav_sim.ros.flight_replay import message as simulated_message
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 pytestmark = pytest.mark.integration

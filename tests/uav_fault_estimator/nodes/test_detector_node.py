@@ -13,11 +13,11 @@ from helpers.alarms import assert_alarms_are_the_cores
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
+from uav_fault_estimator.chain.offline import fly_on_grid
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import SelfTuningDetector, run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
-from uav_fault_estimator.offline import fly_on_grid
 from uav_fault_msgs.msg import FaultAlarm
 from uav_sim.scenario import load_scenario
 

@@ -16,8 +16,8 @@ import pytest
 from helpers.process_table import listening_port
 from uav_common.package_data import config_path
 from uav_common.ros_processes import SIM_TIME_ROS_ARGS, ros2_run_argv
-from uav_fault_estimator.live_view import SUBPROTOCOL
 from uav_fault_estimator.recording.project_bag import project_typestore
+from uav_fault_estimator.viewing.live_view import SUBPROTOCOL
 from websockets.sync.client import connect
 
 # Each panel type's configuration in foxglove-sdk's layout model (None: no settings), and

@@ -29,7 +29,8 @@ from rclpy.serialization import deserialize_message
 from uav_common.package_data import default_parameters
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
-from uav_fault_estimator.live_view import (
+from uav_fault_estimator.recording.project_bag import project_typestore
+from uav_fault_estimator.viewing.live_view import (
     SET_REFUSED,
     SUBPROTOCOL,
     LiveView,
@@ -37,7 +38,6 @@ from uav_fault_estimator.live_view import (
     parameter_set_allowed,
     split_parameter_name,
 )
-from uav_fault_estimator.recording.project_bag import project_typestore
 from uav_fault_msgs.msg import FaultEstimate
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import ClientConnection, connect

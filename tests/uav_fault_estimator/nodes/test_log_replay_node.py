@@ -17,13 +17,13 @@ from diagnostic_msgs.msg import DiagnosticArray
 from helpers import simulated_logs
 from helpers.alarms import assert_alarms_are_the_cores
 from helpers.simulated_logs import ALFA, FIXTURE_AIRFRAME
+from uav_aircraft.airframe import load_airframe
 from uav_common.message_fields import air_data_array, setpoints_array, stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
 from uav_fault_estimator.flight_logs.streams import ATTITUDE, GROUND_VELOCITY

@@ -17,8 +17,8 @@ from helpers.repo import SCRIPTS
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv, wait_until
+from uav_fault_estimator.chain.offline import fly_on_grid
 from uav_fault_estimator.detection.calibration_file import calibration_from_dict
-from uav_fault_estimator.offline import fly_on_grid
 from uav_fault_estimator.recording.project_bag import (
     flight_from_recording,
     project_typestore,

@@ -14,12 +14,12 @@ from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import Imu, NavSatFix
 from std_msgs.msg import Float64
 from tf2_msgs.msg import TFMessage
+from uav_aircraft.frames import GRAVITY_MPS2
 from uav_common.message_fields import stamp_seconds, state_array
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.standard_frames import VELOCITY_NED
+from uav_fault_estimator.viewing.standard_frames import VELOCITY_NED
 from uav_fault_msgs.msg import AircraftState, FaultVector
-from uav_sim.frames import GRAVITY_MPS2
 
 pytestmark = pytest.mark.integration
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers.repo import SCRIPTS
+from uav_aircraft.flown_aircraft import FlownAircraft, SensorBias
 from uav_fault_estimator.recording.project_bag import (
     Recording,
     RecordingError,
@@ -21,7 +22,6 @@ from uav_fault_estimator.recording.project_bag import (
 )
 from uav_fault_estimator.reporting import report
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
-from uav_sim.flown_aircraft import FlownAircraft, SensorBias
 
 REPORT = SCRIPTS / "report.py"
 ESTIMATES = 200

@@ -9,8 +9,13 @@ import yaml
 _SOURCE_PACKAGES = Path(__file__).resolve().parents[2]  # ros_ws/src in a checkout
 
 
+def source_dir(package: str) -> Path:
+    """The package's folder in this source tree (ros_ws/src/<package>)."""
+    return _SOURCE_PACKAGES / package
+
+
 def share_dir(package: str) -> Path:
-    """The package's share folder (config/, and for uav_sim jsbsim/ and scenarios/).
+    """The package's share folder (config/; uav_sim's scenarios/, uav_aircraft's aircraft/).
 
     The colcon install space when the package is installed (ament index), else its folder
     in the source tree, so that the core runs from a checkout without a build.
@@ -21,11 +26,11 @@ def share_dir(package: str) -> Path:
             get_package_share_directory,
         )
     except ImportError:
-        return _SOURCE_PACKAGES / package
+        return source_dir(package)
     try:
         return Path(get_package_share_directory(package))
     except (PackageNotFoundError, OSError):  # not installed, or no ROS environment
-        return _SOURCE_PACKAGES / package
+        return source_dir(package)
 
 
 def config_path(package: str, config_file: str) -> Path:

@@ -1,2 +1,2 @@
-"""Fixed-wing UAV flight simulation on JSBSim with seeded faults, one folder per aircraft
-(core modules import no rclpy)."""
+"""Fixed-wing UAV flight simulation on JSBSim with seeded faults, flying the aircraft of
+uav_aircraft (core modules import no rclpy)."""

@@ -17,9 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from uav_sim.trim import Trim
-from uav_sim.vehicles import AutopilotGains
+from uav_aircraft.trim import Trim
+from uav_aircraft.vehicles import AutopilotGains
 
 
 def clamp(value: float, low: float, high: float) -> float:

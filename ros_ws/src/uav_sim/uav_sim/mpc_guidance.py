@@ -36,13 +36,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import proxsuite
+from uav_aircraft.frames import GRAVITY_MPS2
 
-from uav_sim.frames import GRAVITY_MPS2
 from uav_sim.guidance import WaypointGuidance, wrap_angle
 
-# sim_node's /diagnostics keys: the scenario's guidance method, and its steps flown on the
-# vector field because a QP was not solved
-METHOD_KEY, FALLBACKS_KEY = "guidance", "guidance_fallbacks"
 MIN_SPEED_MPS = 5.0  # below it the yaw-rate limit g tan(phi) / V is meaningless
 
 

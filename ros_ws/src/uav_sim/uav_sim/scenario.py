@@ -1,8 +1,8 @@
 """Scenario files (docs/design.md schema): load, check every key, and fail with one clear message.
 
 A scenario names the flight (start, waypoints, duration), the vehicle flown and modelled
-(uav_sim.vehicles), the wind and turbulence, the
-sensors on board, how the flown aircraft differs from the model (uav_sim.flown_aircraft),
+(uav_aircraft.vehicles), the wind and turbulence, the
+sensors on board, how the flown aircraft differs from the model (uav_aircraft.flown_aircraft),
 the faults seeded into the aircraft and the sensor dropouts of the state and air-data
 streams. Loading is
 strict: an unknown or missing key, a wrong type or an impossible value stops with a
@@ -16,6 +16,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, read_aircraft
+from uav_aircraft.vehicles import (
+    DEFAULT_VEHICLE,
+    VEHICLE_FILE,
+    VehicleError,
+    check_vehicle_name,
+    load_vehicle,
+)
 from uav_common.channels import (
     ACTUATOR_FAULT_NAMES,
     AIR_DATA_CHANNELS,
@@ -25,18 +33,8 @@ from uav_common.channels import (
 )
 from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
 
-from uav_sim.flown_aircraft import (
-    BIAS_LIMIT_DEG,
-    CG_OFFSET_LIMIT_M,
-    NOMINAL,
-    SCALE_RANGE,
-    FlownAircraft,
-    SensorBias,
-    coefficient_names,
-)
 from uav_sim.mpc_guidance import MpcSettings
 from uav_sim.paths import scenarios_dir
-from uav_sim.vehicles import DEFAULT_VEHICLE, VehicleError, check_vehicle_name, load_vehicle
 
 # from_wind: the paper's von Karman turbulence from the background wind (uav_sim.turbulence);
 # the others: JSBSim's MIL-HDBK-1797 presets (uav_sim.wind).
@@ -196,6 +194,18 @@ def default_scenario_path() -> Path:
     return scenarios_dir() / DEFAULT_SCENARIO
 
 
+def vehicle_scenario_path(vehicle: str, kind: str) -> Path:
+    """The shipped scenario file of the vehicle's `kind` flight ("default": faults seeded,
+    "fault_free": the same flight without them), as its vehicle.yaml names it; ScenarioError
+    (one line) when that file is not among the shipped scenarios."""
+    named = load_vehicle(vehicle)
+    path = scenarios_dir() / getattr(named, f"{kind}_scenario_file")
+    if not path.is_file():
+        raise ScenarioError(f"vehicle file {named.folder / VEHICLE_FILE}: its {kind} scenario "
+                            f"{path.name} is not in {path.parent}")
+    return path
+
+
 def _initial(reader: Reader) -> InitialCondition:
     names = {"latitude_deg", "longitude_deg", "altitude_m", "airspeed_mps", "heading_deg"}
     reader.check_keys(names)
@@ -248,58 +258,8 @@ def _guidance(reader: Reader) -> Guidance:
     return Guidance(method, dataclasses.replace(defaults, **settings))
 
 
-def _scale(reader: Reader, name: str) -> float:
-    return reader.number(name, minimum=SCALE_RANGE[0], maximum=SCALE_RANGE[1])
-
-
-def _triple(reader: Reader, name: str, low: float, high: float) -> tuple[float, float, float]:
-    """[x, y, z], each in low..high."""
-    values = reader.items(name)
-    if len(values) != 3 or not all(map(is_number, values)) or not all(
-            low <= value <= high for value in values):
-        reader.fail(f"'{reader.key(name)}' must be [x, y, z], each in {low:g}..{high:g}, "
-                    f"got {values!r}")
-    return tuple(float(value) for value in values)
-
-
-def read_aircraft(reader: Reader, vehicle: str) -> FlownAircraft:
-    """An `aircraft:` block (a scenario's flown aircraft, a model calibration's model) of the
-    named vehicle, strictly: unknown keys and coefficient names refused, scales and biases
-    within their limits."""
-    reader.check_keys(set(), {"mass_scale", "inertia_scale", "cg_offset_m", "thrust_scale",
-                              "coefficients", "sensor_bias"})
-    data = reader.data
-    coefficients = reader.child("coefficients") if "coefficients" in data else None
-    if coefficients is not None:
-        coefficients.check_keys(set(), set(coefficient_names(load_vehicle(vehicle))))
-    bias = reader.child("sensor_bias") if "sensor_bias" in data else None
-    if bias is not None:
-        bias.check_keys(set(), {"airspeed_scale", "angle_of_attack_deg", "sideslip_deg"})
-
-    def angle(name: str) -> float:
-        if bias is None or name not in bias.data:
-            return 0.0
-        return bias.number(name, minimum=-BIAS_LIMIT_DEG, maximum=BIAS_LIMIT_DEG)
-
-    return FlownAircraft(
-        mass_scale=_scale(reader, "mass_scale") if "mass_scale" in data else 1.0,
-        inertia_scale=(_triple(reader, "inertia_scale", *SCALE_RANGE)
-                       if "inertia_scale" in data else (1.0, 1.0, 1.0)),
-        cg_offset_m=(_triple(reader, "cg_offset_m", -CG_OFFSET_LIMIT_M, CG_OFFSET_LIMIT_M)
-                     if "cg_offset_m" in data else (0.0, 0.0, 0.0)),
-        thrust_scale=_scale(reader, "thrust_scale") if "thrust_scale" in data else 1.0,
-        coefficients=tuple((name, _scale(coefficients, name))
-                           for name in (coefficients.data if coefficients else ())),
-        sensor_bias=SensorBias(
-            airspeed_scale=(_scale(bias, "airspeed_scale")
-                            if bias is not None and "airspeed_scale" in bias.data else 1.0),
-            angle_of_attack_deg=angle("angle_of_attack_deg"),
-            sideslip_deg=angle("sideslip_deg")),
-    )
-
-
 def _vehicle(reader: Reader) -> str:
-    """The `vehicle` key: a shipped vehicle's name (uav_sim.vehicles)."""
+    """The `vehicle` key: a shipped vehicle's name (uav_aircraft.vehicles)."""
     try:
         return check_vehicle_name(reader.text("vehicle"))
     except VehicleError as error:
@@ -427,8 +387,8 @@ def load_scenario(path: str | Path) -> Scenario:
         sensors=sensors,
         guidance=_guidance(reader.child("guidance")) if "guidance" in data else Guidance(),
         vehicle=vehicle,
-        aircraft=(read_aircraft(reader.child("aircraft"), vehicle) if "aircraft" in data
-                  else NOMINAL),
+        aircraft=(read_aircraft(reader.child("aircraft"), load_vehicle(vehicle))
+                  if "aircraft" in data else NOMINAL),
         faults=_faults(reader),
         sensor_dropouts=dropouts,
         setpoints=tuple(_setpoint(reader.element("setpoints", index))

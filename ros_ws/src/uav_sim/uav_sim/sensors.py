@@ -18,10 +18,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from uav_aircraft.flown_aircraft import SensorBias, biased_air_data
+from uav_aircraft.frames import EARTH_RADIUS_M
 from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
-
-from uav_sim.flown_aircraft import SensorBias
-from uav_sim.frames import EARTH_RADIUS_M
 
 
 @dataclass(frozen=True)
@@ -146,19 +145,3 @@ class SensorModel:
         return (measured, controls + self.control_errors.next(),
                 air_data + self.air_data_errors.next())
 
-
-def biased_air_data(air_data: np.ndarray, bias: SensorBias) -> np.ndarray:
-    """(airspeed [m/s], alpha, beta [rad]) as sensors with this bias read them."""
-    airspeed_mps, alpha_rad, beta_rad = air_data
-    return np.array([airspeed_mps * bias.airspeed_scale,
-                     alpha_rad + math.radians(bias.angle_of_attack_deg),
-                     beta_rad + math.radians(bias.sideslip_deg)])
-
-
-def true_air_data(measured: np.ndarray, bias: SensorBias) -> np.ndarray:
-    """The (airspeed [m/s], alpha, beta [rad]) that sensors with this bias read as measured:
-    biased_air_data's inverse."""
-    airspeed_mps, alpha_rad, beta_rad = measured
-    return np.array([airspeed_mps / bias.airspeed_scale,
-                     alpha_rad - math.radians(bias.angle_of_attack_deg),
-                     beta_rad - math.radians(bias.sideslip_deg)])

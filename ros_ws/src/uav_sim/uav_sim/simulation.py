@@ -13,15 +13,7 @@ from dataclasses import dataclass
 
 import jsbsim
 import numpy as np
-from uav_common.channels import (
-    AIR_DATA_CHANNELS,
-    FAULT_NAMES,
-    SETPOINT_FIELDS,
-    STATE_CHANNELS,
-    STUCK_SURFACE_FAULT_NAMES,
-)
-
-from uav_sim.aircraft import (
+from uav_aircraft.fdm import (
     JSBSIM_DT_S,
     KG_PER_LB,
     M_PER_FT,
@@ -30,15 +22,23 @@ from uav_sim.aircraft import (
     set_faults,
     set_stuck_positions,
 )
+from uav_aircraft.frames import north_east_m
+from uav_aircraft.propeller import Propeller
+from uav_aircraft.trim import Trim, start_trimmed, trim_level_flight
+from uav_aircraft.vehicles import load_vehicle
+from uav_common.channels import (
+    AIR_DATA_CHANNELS,
+    FAULT_NAMES,
+    SETPOINT_FIELDS,
+    STATE_CHANNELS,
+    STUCK_SURFACE_FAULT_NAMES,
+)
+
 from uav_sim.autopilot import Autopilot, FlightState
-from uav_sim.frames import north_east_m
 from uav_sim.guidance import WaypointGuidance
 from uav_sim.mpc_guidance import MpcGuidance
-from uav_sim.propeller import Propeller
 from uav_sim.scenario import Scenario
 from uav_sim.sensors import SensorModel
-from uav_sim.trim import Trim, start_trimmed, trim_level_flight
-from uav_sim.vehicles import load_vehicle
 from uav_sim.wind import (
     FROM_WIND,
     FilteredWind,

@@ -31,8 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm, solve_continuous_lyapunov
-
-from uav_sim.aircraft import M_PER_FT, MPS_PER_KT
+from uav_aircraft.fdm import M_PER_FT, MPS_PER_KT
 
 VON_KARMAN_A = 1.339  # the von Karman spectra's constant (MIL-F-8785C, 3.7.2)
 

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import jsbsim
 import numpy as np
+from uav_aircraft.fdm import M_PER_FT
+from uav_common.filters import LowPass
 
-from uav_sim.aircraft import M_PER_FT
-from uav_sim.filters import LowPass
 from uav_sim.scenario import Wind
 from uav_sim.turbulence import VonKarmanTurbulence, milspec_scales
 

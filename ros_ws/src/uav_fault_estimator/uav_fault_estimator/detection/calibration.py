@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from uav_sim.vehicles import DEFAULT_VEHICLE
+from uav_aircraft.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator.detection.change_detection import Weibull
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import yaml
-from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
 
 from uav_fault_estimator.detection.calibration import (
     SIMULATED_AIRFRAME,

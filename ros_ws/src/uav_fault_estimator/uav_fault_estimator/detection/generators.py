@@ -28,7 +28,7 @@ pitch and phi_c, theta_c their setpoints [rad]; h' the climb rate (the ground ve
 up) and h'_c the autopilot's commanded one [m/s]; throttle 0..1; gamma the flight-path angle
 from the ground velocity. An engine that stops shows in climb_tracking: the aircraft sinks
 whatever climb its autopilot commands. lateral_force is the body-y specific force f_y
-[m/s^2] (uav_sim.frames), from the ground velocity's change since the sample before: an
+[m/s^2] (uav_aircraft.frames), from the ground velocity's change since the sample before: an
 autopilot that coordinates its turns flies with f_y near a constant (the sensors' bias),
 and a rudder stuck off centre holds the aircraft in a sideslip whose side force shows
 within a second, whatever the roll loop does to hide it. longitudinal_force is its body-x
@@ -50,8 +50,8 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from uav_aircraft.frames import specific_force_body_mps2
 from uav_common.channels import CONTROL_CHANNELS, SETPOINT_FIELDS, STATE_CHANNELS
-from uav_sim.frames import specific_force_body_mps2
 
 _P, _Q, _R = (STATE_CHANNELS.index(name) for name in ("roll_rate", "pitch_rate", "yaw_rate"))
 _ROLL, _PITCH, _YAW = (STATE_CHANNELS.index(name) for name in ("roll", "pitch", "yaw"))

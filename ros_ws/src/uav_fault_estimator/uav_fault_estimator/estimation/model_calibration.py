@@ -21,16 +21,15 @@ No ROS here.
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from proxsuite import proxqp
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
-from uav_sim.propeller import Propeller
-from uav_sim.vehicles import Vehicle, load_vehicle
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
+from uav_aircraft.propeller import Propeller
+from uav_aircraft.vehicles import load_vehicle
 
 from uav_fault_estimator.estimation.model_parameters import (
     SCALE_STEP_PCT,
@@ -78,12 +77,6 @@ class FlightTerms:
     linear: np.ndarray
     chi_square: float
     rows: int
-
-
-def model_file_sha256(vehicle: Vehicle) -> str:
-    """The SHA-256 of the vehicle's XML as shipped: a calibration is valid for this file
-    only."""
-    return hashlib.sha256(vehicle.model_file.read_bytes()).hexdigest()
 
 
 def residual_weights(noise: NoiseCalibration) -> np.ndarray:

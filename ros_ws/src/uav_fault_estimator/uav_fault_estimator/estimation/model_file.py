@@ -18,14 +18,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from uav_aircraft.flown_aircraft import FlownAircraft, read_aircraft
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.strict_yaml import FileKind, load_yaml
-from uav_sim.flown_aircraft import FlownAircraft
-from uav_sim.scenario import read_aircraft
-from uav_sim.vehicles import load_vehicle
 
 from uav_fault_estimator.estimation.model_calibration import (
     ModelCalibration,
-    model_file_sha256,
 )
 
 MODEL_KEY = "model"  # residual_node's /diagnostics key: its calibration file, or the shipped model
@@ -54,7 +52,7 @@ def load_measured_aircraft(path: str | Path, vehicle: str) -> FlownAircraft:
     ModelCalibrationError (one line) when it cannot be read or is malformed."""
     reader = load_yaml(MEASURED_AIRCRAFT_FILE, Path(path))
     reader.check_keys({"aircraft"})
-    return read_aircraft(reader.child("aircraft"), vehicle)
+    return read_aircraft(reader.child("aircraft"), load_vehicle(vehicle))
 
 
 @dataclass(frozen=True)
@@ -73,7 +71,7 @@ def calibration_dict(calibration: ModelCalibration, vehicle: str, flights: list[
     entries = {
         "vehicle": vehicle,
         "model_file": model.model_file.name,
-        "model_sha256": model_file_sha256(model),
+        "model_sha256": model.model_sha256,
         "aircraft": calibration.aircraft.to_dict(),
     }
     if noise_file:
@@ -104,13 +102,13 @@ def load_model_calibration(path: str | Path, vehicle: str) -> CalibratedModel:
     if reader.text("vehicle") != vehicle:
         reader.fail(f"made for the vehicle {reader.data['vehicle']!r}, not {vehicle!r}")
     model = load_vehicle(vehicle)
-    if reader.text("model_sha256") != model_file_sha256(model):
+    if reader.text("model_sha256") != model.model_sha256:
         reader.fail(f"made for another model file ({reader.data['model_file']!r} with "
                     f"SHA-256 {str(reader.data['model_sha256'])[:12]}...) than "
-                    f"{model.model_file} ({model_file_sha256(model)[:12]}...): recalibrate")
+                    f"{model.model_file} ({model.model_sha256[:12]}...): recalibrate")
     noise_file = None
     if "noise_calibration_file" in reader.data:
         noise_file = path.parent / reader.text("noise_calibration_file")
         if not noise_file.is_file():
             reader.fail(f"'noise_calibration_file' {noise_file} does not exist")
-    return CalibratedModel(read_aircraft(reader.child("aircraft"), vehicle), noise_file)
+    return CalibratedModel(read_aircraft(reader.child("aircraft"), model), noise_file)

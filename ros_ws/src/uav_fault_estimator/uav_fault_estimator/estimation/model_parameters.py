@@ -4,7 +4,7 @@ does to the model aircraft.
 Every parameter is a change from the vehicle's XML as shipped, in a unit of its own: a scale's
 change in percent (CDmin at +10 % is the file's CDmin times 1.10), a vane's bias in degrees.
 So the nominal model is 0 in every parameter, and a calibrated model is a FlownAircraft
-(uav_sim.flown_aircraft) that the residual node's model copies load: the scenario's
+(uav_aircraft.flown_aircraft) that the residual node's model copies load: the scenario's
 `aircraft:` block read the other way round, one schema for both.
 
 - every aerodynamic coefficient of the vehicle's XML by its name there (coefficient_names());
@@ -24,14 +24,14 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from uav_sim.flown_aircraft import (
+from uav_aircraft.flown_aircraft import (
     BIAS_LIMIT_DEG,
     CG_OFFSET_LIMIT_M,
     SCALE_RANGE,
     FlownAircraft,
     coefficient_names,
 )
-from uav_sim.vehicles import Vehicle
+from uav_aircraft.vehicles import Vehicle
 
 MASS_AND_THRUST = ("mass_scale", "thrust_scale")
 INERTIA = ("inertia_x_scale", "inertia_y_scale", "inertia_z_scale")

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from uav_sim.vehicles import DEFAULT_VEHICLE, load_vehicle
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
 
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 

@@ -10,7 +10,7 @@ without integrating. Per evaluation:
   wind to the initial-condition wind; turbulence stays off.
 - Propeller: JSBSim's engine is switched off (`propulsion/jsbsim-engine-on` = 0): its
   propeller speed is a state run_ic() never advances. The thrust and hub moment at the
-  measured engine speed come from the same propeller tables (uav_sim.propeller) and act
+  measured engine speed come from the same propeller tables (uav_aircraft.propeller) and act
   through the aircraft's `propeller_model` reactions.
 - Mass: the fuel on board is the measured fuel mass.
 - Aircraft: the vehicle's XML as shipped, or as a model calibration (model_calibration.py)
@@ -32,8 +32,7 @@ from typing import Any
 
 import jsbsim
 import numpy as np
-from uav_common.channels import CONTROL_CHANNELS, MODEL_FAULT_NAMES, STATE_CHANNELS
-from uav_sim.aircraft import (
+from uav_aircraft.fdm import (
     BODY_ACCELERATIONS,
     EFFECTIVE_THROTTLE,
     FUEL_LOADED_LBS,
@@ -45,10 +44,11 @@ from uav_sim.aircraft import (
     create_fdm,
     set_faults,
 )
-from uav_sim.flown_aircraft import NOMINAL, FlownAircraft
-from uav_sim.frames import ned_to_body
-from uav_sim.propeller import Propeller
-from uav_sim.vehicles import Vehicle, load_vehicle
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
+from uav_aircraft.frames import ned_to_body
+from uav_aircraft.propeller import Propeller
+from uav_aircraft.vehicles import Vehicle, load_vehicle
+from uav_common.channels import CONTROL_CHANNELS, MODEL_FAULT_NAMES, STATE_CHANNELS
 
 from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
 from uav_fault_estimator.estimation.residuals import PredictorFactory, ResidualGenerator

@@ -40,13 +40,12 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from uav_aircraft.flown_aircraft import NO_BIAS, SensorBias, true_air_data
+from uav_aircraft.frames import ned_to_body, wind_triangle_ned_mps
+from uav_aircraft.vehicles import AirDataRange
 from uav_common.channels import STATE_CHANNELS, state_indices
+from uav_common.filters import LowPass, SettlingLowPass
 from uav_common.sample_grid import GRID_TOLERANCE_S
-from uav_sim.filters import LowPass, SettlingLowPass
-from uav_sim.flown_aircraft import NO_BIAS, SensorBias
-from uav_sim.frames import ned_to_body, wind_triangle_ned_mps
-from uav_sim.sensors import true_air_data
-from uav_sim.vehicles import AirDataRange
 
 # phi(state (14,), controls (7,), filtered NED wind (3,)) -> (6,) [dv_ned/dt m/s^2, dpqr/dt rad/s^2]
 Prediction = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]

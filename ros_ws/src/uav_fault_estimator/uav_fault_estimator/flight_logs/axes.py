@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+from uav_aircraft.airframe import AXES
 
-AXES = ("FRD", "FLU")
 # FLU <-> FRD: y and z reversed. ENU <-> NED: x and y exchanged, z reversed.
 _BODY_SWAP = np.diag([1.0, -1.0, -1.0])
 _WORLD_SWAP = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])

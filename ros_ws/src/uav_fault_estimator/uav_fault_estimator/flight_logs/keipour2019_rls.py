@@ -34,9 +34,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from uav_aircraft.airframe import load_airframe
 
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.benchmark import Fold, fault_free, in_folds
 from uav_fault_estimator.flight_logs.evaluation import FlightOutcome, alarms_outcome
 from uav_fault_estimator.flight_logs.ground_truth import FlightTruth

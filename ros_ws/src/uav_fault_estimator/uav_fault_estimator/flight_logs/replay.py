@@ -14,9 +14,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from uav_aircraft.airframe import load_airframe
 from uav_common.channels import AIR_DATA_CHANNELS
 
-from uav_fault_estimator.flight_logs.airframe import load_airframe
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import DetectorInputs, detector_samples
 from uav_fault_estimator.flight_logs.streams import AIRSPEED

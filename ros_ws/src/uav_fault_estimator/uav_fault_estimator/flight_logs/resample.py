@@ -33,15 +33,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from uav_aircraft.airframe import Airframe
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_common.sample_grid import GRID_TOLERANCE_S
 
 from uav_fault_estimator.detection.detector import DetectorFlight
-from uav_fault_estimator.flight_logs.airframe import (
-    Airframe,
-    mixed_output_mismatches,
-    surface_deflections,
-)
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
@@ -56,6 +52,7 @@ from uav_fault_estimator.flight_logs.streams import (
     FlightLog,
     TimedSeries,
 )
+from uav_fault_estimator.flight_logs.surfaces import mixed_output_mismatches, surface_deflections
 
 # Samples further apart than this many median periods are a gap (a dropout), not jitter:
 # logged intervals of a healthy stream vary by tens of percent, a lost sample doubles one.

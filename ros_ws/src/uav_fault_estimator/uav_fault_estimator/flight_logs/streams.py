@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from uav_aircraft.airframe import CONTROLS
 
 # Stream name -> its columns. The values are SI and in FRD body axes / NED Euler angles
 # whatever the log's own convention (the readers convert); `outputs` is the exception: the
@@ -30,7 +31,7 @@ STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
     BODY_RATES: ("roll_rate", "pitch_rate", "yaw_rate"),
     ATTITUDE: ("roll", "pitch", "yaw"),
     AIRSPEED: ("airspeed",),
-    SURFACES: ("aileron", "elevator", "rudder", "throttle"),
+    SURFACES: CONTROLS,
     GROUND_VELOCITY: ("velocity_north", "velocity_east", "velocity_down"),
     WIND: ("wind_north", "wind_east"),
     ROLL_SETPOINT: ("roll_setpoint",),
@@ -38,10 +39,6 @@ STREAM_COLUMNS: Mapping[str, tuple[str, ...]] = {
     VELOCITY_SETPOINT: ("velocity_north_setpoint", "velocity_east_setpoint",
                         "velocity_down_setpoint"),
 }
-OUTPUT_UNITS = ("pwm_us", "normalised")
-# What a log's airspeed is: true (TAS), calibrated (CAS) or indicated (IAS); the readers say
-# which one they found (FlightLog.airspeed_source).
-AIRSPEED_SOURCES = ("true", "calibrated", "indicated")
 
 
 @dataclass(frozen=True)
@@ -71,8 +68,9 @@ class TimedSeries:
 class FlightLog:
     """A flight as a reader found it: name (the file's stem), source (the path read), format
     ("ulog", "ros1_bag", "ros2_bag", "csv"), streams by name (STREAM_COLUMNS, OUTPUTS: those
-    the log has), output_unit (OUTPUT_UNITS) of the OUTPUTS stream, airspeed_source
-    (AIRSPEED_SOURCES: which airspeed the AIRSPEED stream holds, "" when the log has none),
+    the log has), output_unit (uav_aircraft.airframe.OUTPUT_UNITS) of the OUTPUTS stream,
+    airspeed_source (AIRSPEED_SOURCES there: which airspeed the AIRSPEED stream holds, ""
+    when the log has none),
     warnings: what the reader noticed and the user should know (each line names the log;
     a damaged ULog read up to its damage), start_stamp_s: the instant its times count from,
     in the log's own clock [s] (UNIX time for ROS logs, time since boot for ULogs), sought:

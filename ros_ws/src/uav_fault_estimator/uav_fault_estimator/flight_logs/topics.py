@@ -68,8 +68,8 @@ Streams = dict[str, TimedSeries]
 class TopicMeaning:
     """How one message type becomes streams: its type, the fields it reads (dotted paths;
     arrays named bare), which of them are arrays, the axes of its rates and attitude
-    ("FRD" or "FLU", axes.py), the airspeed it holds (streams.AIRSPEED_SOURCES, "" none),
-    streams(times_s, fields, axes) -> the streams by name, and the names of the streams it
+    ("FRD" or "FLU", axes.py), the airspeed it holds (uav_aircraft.airframe.AIRSPEED_SOURCES,
+    "" none), streams(times_s, fields, axes) -> the streams by name, and the names of the streams it
     can give."""
 
     message_type: str

@@ -15,6 +15,7 @@ import sys
 from typing import Any
 
 from rclpy.node import Node
+from uav_aircraft.ros.vehicle_parameter import VEHICLE_PARAMETER
 from uav_common.envelope import (
     AIR_DATA_LIMITS,
     CONTROL_LIMITS,
@@ -45,7 +46,6 @@ from uav_fault_msgs.msg import (
     ControlInputs,
     FaultAlarm,
 )
-from uav_sim.ros.vehicle_parameter import VEHICLE_PARAMETER
 
 from uav_fault_estimator.detection.calibration import simulated_airframe
 from uav_fault_estimator.detection.calibration_file import (

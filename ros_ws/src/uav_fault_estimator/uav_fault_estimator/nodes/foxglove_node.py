@@ -27,10 +27,10 @@ from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.node_life import run_node
 from uav_common.ros.parameters import ParameterSpec, declare_parameters
 
-from uav_fault_estimator.live_view import PARAMETER_SET_POLICIES, LiveView, parameter_name
 from uav_fault_estimator.nodes.raw_topics import RawTopics
 from uav_fault_estimator.nodes.ros_parameters import RosParameters, plain_value
 from uav_fault_estimator.recording.project_bag import project_typestore
+from uav_fault_estimator.viewing.live_view import PARAMETER_SET_POLICIES, LiveView, parameter_name
 
 PARAMETERS = {
     "host": ParameterSpec("address the WebSocket server listens on (127.0.0.1: this machine "

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
+from uav_aircraft.ros.vehicle_parameter import VEHICLE_PARAMETER
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
 from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
@@ -28,7 +29,6 @@ from uav_common.ros.parameters import (
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import FaultEstimate, Residuals
-from uav_sim.ros.vehicle_parameter import VEHICLE_PARAMETER
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY, SOLVER_METHODS
 from uav_fault_estimator.estimation.estimator_step import (

@@ -15,6 +15,8 @@ import sys
 import time
 
 from rclpy.node import Node
+from uav_aircraft.flown_aircraft import NOMINAL
+from uav_aircraft.ros.vehicle_parameter import VEHICLE_PARAMETER
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.envelope import (
     AIR_DATA_LIMITS,
@@ -35,8 +37,6 @@ from uav_common.ros.parameters import (
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
-from uav_sim.flown_aircraft import NOMINAL
-from uav_sim.ros.vehicle_parameter import VEHICLE_PARAMETER
 
 from uav_fault_estimator.estimation.model_file import (
     MODEL_KEY,

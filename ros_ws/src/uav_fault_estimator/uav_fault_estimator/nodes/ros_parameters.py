@@ -25,7 +25,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.task import Future
 
-from uav_fault_estimator.live_view import parameter_name, split_parameter_name
+from uav_fault_estimator.viewing.live_view import parameter_name, split_parameter_name
 
 SPIN_S = 0.01  # longest wait for one response before the deadline is looked at again [s]
 SERVICES = {ListParameters: "list_parameters", GetParameters: "get_parameters",

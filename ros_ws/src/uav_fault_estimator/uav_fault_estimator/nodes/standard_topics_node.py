@@ -44,7 +44,7 @@ from uav_fault_msgs.msg import AircraftState, FaultEstimate, FaultVector
 
 from uav_fault_estimator.nodes.matched_streams import guarded
 from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
-from uav_fault_estimator.standard_frames import GeodeticPoint, StandardFrames, StandardState
+from uav_fault_estimator.viewing.standard_frames import GeodeticPoint, StandardFrames, StandardState
 
 PARAMETERS = {
     "map_origin_from_first_state": ParameterSpec(

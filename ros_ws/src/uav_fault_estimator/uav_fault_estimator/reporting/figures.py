@@ -14,8 +14,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from uav_aircraft.frames import north_east_m, wind_triangle_ned_mps
 from uav_common.message_fields import air_data_array, stamp_nanoseconds, stamp_seconds, state_array
-from uav_sim.frames import north_east_m, wind_triangle_ned_mps
 
 RESIDUAL_LABELS = ("x [m/s²]", "y [m/s²]", "z [m/s²]", "roll [rad/s²]", "pitch [rad/s²]",
                    "yaw [rad/s²]")

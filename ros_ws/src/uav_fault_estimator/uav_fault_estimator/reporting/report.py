@@ -9,12 +9,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from uav_common.health import CPU_KEY, hardware_id
+from uav_aircraft.flown_aircraft import DIAGNOSTIC_KEY as FLOWN_AIRCRAFT_KEY
+from uav_common.health import CPU_KEY, GUIDANCE_FALLBACKS_KEY, GUIDANCE_KEY, hardware_id
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
-from uav_sim.flown_aircraft import DIAGNOSTIC_KEY as FLOWN_AIRCRAFT_KEY
-from uav_sim.mpc_guidance import FALLBACKS_KEY as GUIDANCE_FALLBACKS_KEY
-from uav_sim.mpc_guidance import METHOD_KEY as GUIDANCE_KEY
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S

@@ -1,1 +1,1 @@
-"""The ROS glue every node shares (messages, node tools) and sim_node."""
+"""sim_node, and a simulated flight replayed onto the graph for tests (flight_replay)."""

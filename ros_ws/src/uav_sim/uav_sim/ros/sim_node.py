@@ -27,7 +27,10 @@ import rclpy
 from geometry_msgs.msg import Vector3Stamped
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
+from uav_aircraft.flown_aircraft import DIAGNOSTIC_KEY
+from uav_aircraft.vehicles import vehicle_names
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
+from uav_common.health import GUIDANCE_FALLBACKS_KEY, GUIDANCE_KEY
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
@@ -54,11 +57,8 @@ from uav_fault_msgs.msg import (
     WindEstimate,
 )
 
-from uav_sim.flown_aircraft import DIAGNOSTIC_KEY
-from uav_sim.mpc_guidance import FALLBACKS_KEY, METHOD_KEY
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Sample, Simulation
-from uav_sim.vehicles import vehicle_names
 
 PARAMETERS = {
     "scenario": ParameterSpec("scenario YAML file; empty: the shipped scenarios/default.yaml",
@@ -219,8 +219,8 @@ class SimNode(Node):
             "scenario": self.scenario.name,
             DIAGNOSTIC_KEY: self.flown_aircraft,
             "missing_channels": ",".join(missing) or "none",
-            METHOD_KEY: self.scenario.guidance.method,
-            FALLBACKS_KEY: self.simulation.guidance_fallbacks,
+            GUIDANCE_KEY: self.scenario.guidance.method,
+            GUIDANCE_FALLBACKS_KEY: self.simulation.guidance_fallbacks,
         }
         if missing:
             self.diagnostics.update(WARN, "sensor dropout: " + ", ".join(missing), values)

@@ -1,0 +1,10 @@
+"""The `vehicle` parameter every node that models an aircraft declares (sim_node,
+residual_node, mhe_node, detector_node): one declaration, the shipped vehicles its choices."""
+
+from uav_common.ros.parameters import ParameterSpec
+
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, vehicle_names
+
+VEHICLE_PARAMETER = ParameterSpec(
+    "the aircraft modelled: a folder of uav_aircraft's aircraft/ (docs/aircraft.md), whose model, "
+    "noise model and calibrations the node loads", DEFAULT_VEHICLE, choices=vehicle_names())

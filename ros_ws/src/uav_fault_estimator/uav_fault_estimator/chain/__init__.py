@@ -1,0 +1,2 @@
+"""Running the main job's chain: offline without ROS, through the node graph (the demo), and
+the calibration commands' output."""

@@ -1,0 +1,168 @@
+"""The node graph, described once: the nodes that fly and diagnose an aircraft, their
+packages, their start order, and the ROS arguments that wire them for one aircraft or
+several (namespaces, the one clock, a model calibration). demo_run.py (demo.sh) and
+scripts/bringup.sh start what it says (no ROS here).
+
+    python -m uav_fault_estimator.chain.node_graph [--ns NS] [--scenario FILE ...]
+        [--params FILE] [--model-calibration FILE] [--foxglove] [--caller NAME]
+
+prints bringup.sh's plan: one line per node in start order, `KEY PACKAGE EXECUTABLE` and
+the node's ROS arguments, each word quoted for a POSIX shell (KEY: `uavk/node` with several
+aircraft, else the node's name). A scenario or model calibration that cannot be used is one
+line on stderr, named as the caller (default node_graph), and status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from uav_aircraft.vehicles import DEFAULT_VEHICLE
+from uav_common.ros_processes import SIM_TIME_ROS_ARGS
+from uav_sim.scenario import load_scenario
+
+from uav_fault_estimator.estimation.model_file import load_model_calibration
+
+SIMULATOR = "sim_node"
+PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
+            "mhe_node": "uav_fault_estimator", "detector_node": "uav_fault_estimator",
+            "standard_topics_node": "uav_fault_estimator",
+            "recorder_node": "uav_fault_estimator", "foxglove_node": "uav_fault_estimator",
+            "log_replay_node": "uav_fault_estimator"}
+# Each aircraft's nodes in start order: the simulator last, once the others listen.
+VEHICLE_NODES = ("residual_node", "mhe_node", "detector_node", "standard_topics_node",
+                 SIMULATOR)
+# The nodes that model the aircraft: each takes its `vehicle` parameter from the scenario.
+MODELLING_NODES = ("residual_node", "mhe_node", "detector_node", SIMULATOR)
+
+
+def vehicle_namespaces(count: int, namespace: str = "") -> list[str]:
+    """The aircraft's namespaces: one aircraft flies in namespace ("" for none), several
+    under /uav1, /uav2, ... (ValueError when several are given one namespace)."""
+    if count > 1 and namespace:
+        raise ValueError("a namespace names one aircraft's; several fly /uav1, /uav2, ...")
+    return [namespace] if count <= 1 else [f"/uav{k + 1}" for k in range(count)]
+
+
+def node_key(namespace: str, executable: str) -> str:
+    """How a launcher names a node of an aircraft in namespace ("" for the whole graph or a
+    lone aircraft): `uav1/mhe_node`, or `mhe_node`; also its log's path under the logs."""
+    return f"{namespace.strip('/')}/{executable}".lstrip("/")
+
+
+@dataclass(frozen=True)
+class ModelCalibrationFiles:
+    """What a model calibration gives the nodes: residual_node's models (model_file) and
+    the noise file it names for mhe_node (None: none)."""
+
+    model_file: Path
+    noise_file: Path | None = None
+
+
+def model_calibration_files(model_file: Path, vehicles: Sequence[str]) -> ModelCalibrationFiles:
+    """The model calibration for every one of the vehicles, read and checked before any
+    node starts; ModelCalibrationError (one line) when it cannot be used for one of them."""
+    noise_file = None
+    for vehicle in sorted(set(vehicles)):
+        noise_file = load_model_calibration(model_file, vehicle).noise_file
+    return ModelCalibrationFiles(model_file, noise_file)
+
+
+def scenario_vehicles(scenarios: Sequence[Path]) -> list[str]:
+    """The vehicle each scenario flies (none given: the default, one aircraft);
+    ScenarioError for a scenario that cannot be read."""
+    return [load_scenario(path).vehicle for path in scenarios] or [DEFAULT_VEHICLE]
+
+
+def node_ros_args(executable: str, namespace: str, clock_leader: bool,
+                  calibration: ModelCalibrationFiles | None = None,
+                  vehicle: str = DEFAULT_VEHICLE) -> list[str]:
+    """The ROS arguments that wire one of an aircraft's nodes (or, namespace "", one of the
+    whole graph): its namespace, the vehicle it models, the model calibration's files, and
+    /clock for every node but the simulator that publishes it (clock_leader: the first
+    aircraft's)."""
+    args = ["-r", f"__ns:={namespace}"] if namespace else []
+    if executable in MODELLING_NODES:
+        args += ["-p", f"vehicle:={vehicle}"]
+    if calibration is not None and executable == "residual_node":
+        args += ["-p", f"model_calibration_file:={calibration.model_file}"]
+    if calibration is not None and calibration.noise_file and executable == "mhe_node":
+        args += ["-p", f"noise_calibration_file:={calibration.noise_file}"]
+    if not (executable == SIMULATOR and clock_leader):
+        args += SIM_TIME_ROS_ARGS
+    return args
+
+
+@dataclass(frozen=True)
+class PlannedNode:
+    """A node to start: its key (`uavk/node` with several aircraft, else its name), package,
+    executable and ROS arguments."""
+
+    key: str
+    package: str
+    executable: str
+    ros_args: list[str]
+
+    def line(self) -> str:
+        """bringup.sh's line for it: words quoted for a POSIX shell."""
+        return shlex.join([self.key, self.package, self.executable, *self.ros_args])
+
+
+def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | None = None,
+              calibration: ModelCalibrationFiles | None = None,
+              foxglove: bool = False) -> list[PlannedNode]:
+    """bringup.sh's nodes in start order: every aircraft's (the last aircraft's first, so
+    that the followers wait for the clock the first one's simulator starts), each simulator
+    flying its scenario (none given: the shipped default, one aircraft) and each node
+    modelling the scenario's vehicle, then foxglove_node for the whole graph; params: a
+    parameter file for every node. ScenarioError (a ValueError) for a scenario that cannot
+    be read."""
+    namespaces = vehicle_namespaces(max(len(scenarios), 1), namespace)
+    common = ["--params-file", str(params)] if params else []
+    vehicles = scenario_vehicles(scenarios)
+    plan = []
+    for index in reversed(range(len(namespaces))):
+        namespace = namespaces[index]
+        for executable in VEHICLE_NODES:
+            # the parameter file first: what the graph sets overrides it (rcl: the last wins)
+            args = [*common, *node_ros_args(executable, namespace, index == 0, calibration,
+                                            vehicles[index])]
+            if executable == SIMULATOR and scenarios:
+                args += ["-p", f"scenario:={scenarios[index]}"]
+            key = node_key(namespace if len(namespaces) > 1 else "", executable)
+            plan.append(PlannedNode(key, PACKAGES[executable], executable, args))
+    if foxglove:
+        only = namespaces[0] if len(namespaces) == 1 else ""
+        plan.append(PlannedNode("foxglove_node", PACKAGES["foxglove_node"], "foxglove_node",
+                                [*common, *node_ros_args("foxglove_node", only, False)]))
+    return plan
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ns", default="")
+    parser.add_argument("--scenario", action="append", type=Path, default=[])
+    parser.add_argument("--params", type=Path)
+    parser.add_argument("--model-calibration", type=Path)
+    parser.add_argument("--foxglove", action="store_true")
+    parser.add_argument("--caller", default="node_graph", help="the name errors start with")
+    arguments = parser.parse_args(argv)
+    try:
+        calibration = (model_calibration_files(arguments.model_calibration,
+                                               scenario_vehicles(arguments.scenario))
+                       if arguments.model_calibration else None)
+        plan = live_plan(arguments.scenario, arguments.ns, arguments.params, calibration,
+                         arguments.foxglove)
+    except ValueError as error:  # ScenarioError, ModelCalibrationError
+        print(f"{arguments.caller}: {' '.join(str(error).split())}", file=sys.stderr)
+        return 2
+    print("\n".join(node.line() for node in plan))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,199 @@
+"""The main job's chain without ROS: the core simulator, the residual generator and the
+moving-horizon estimator on one scenario, with the nodes' parameters (their config YAML
+unless given; the scenario's vehicle), every 0.5 s of simulation time as the nodes do. For
+tests, tuning and benchmarks; metrics.py turns the result into metrics.json's figures."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
+from uav_aircraft.vehicles import DEFAULT_VEHICLE
+from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
+from uav_common.package_data import default_parameters
+from uav_common.sample_grid import on_grid
+from uav_sim.scenario import Scenario, load_scenario, vehicle_scenario_path
+from uav_sim.simulation import Simulation
+
+from uav_fault_estimator.campaigns.campaign import Campaign
+from uav_fault_estimator.detection.detector import DetectorFlight
+from uav_fault_estimator.estimation.estimator_step import EstimatorStep, ResidualInput
+from uav_fault_estimator.estimation.model_calibration import SensorFlight
+from uav_fault_estimator.estimation.prediction import residual_sampler
+from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
+
+PACKAGE = "uav_fault_estimator"
+_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
+
+
+def fly_and_estimate(
+    scenario: Scenario,
+    residual_overrides: Mapping[str, Any] | None = None,
+    mhe_overrides: Mapping[str, Any] | None = None,
+    true_wind: bool = False,
+    model: FlownAircraft = NOMINAL,
+) -> tuple[EstimateSeries, SeededSeries]:
+    """Fly the scenario and estimate its faults every update_period_s [s] of sim time.
+
+    The estimator's parameters are mhe_node's defaults, then the scenario's `estimator`
+    overrides, then mhe_overrides. Returns the published estimates (what mhe_node would
+    publish; solve times are the estimator's update times) and the seeded faults sampled
+    at the same stamps. The models fly the air data where the aircraft has it, as
+    residual_node does. true_wind: the models get the true wind (background and
+    turbulence) instead, which no aircraft has: a bound on what better wind knowledge
+    could give. model: the aircraft the models evaluate (a model calibration's), as
+    residual_node's model_calibration_file gives it.
+    """
+    residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
+                "vehicle": scenario.vehicle, **(residual_overrides or {})}
+    mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), "vehicle": scenario.vehicle,
+           **scenario.estimator, **(mhe_overrides or {})}
+    sampler = residual_sampler(residual, model)
+    step = EstimatorStep(mhe)
+    simulation = Simulation(scenario)
+    stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
+    sample = simulation.sample()
+    while True:
+        wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
+        result = sampler.update(sample.time_s, sample.state, sample.controls, wind,
+                                None if true_wind else sample.air_data)
+        if result is not None:
+            estimate = step.update(ResidualInput(
+                sample.time_s, result.residual, result.valid, result.sensitivity,
+                sampler.generator.column_names, result.wind_source, sampler.generator.tau_a_s))
+            stamps.append(sample.time_s)
+            values.append(estimate.published_pct)
+            statuses.append(int(estimate.estimate.status))
+            times_ms.append(estimate.estimate.update_time_ms)
+            cpu_ms.append(estimate.estimate.update_cpu_ms)
+            seeded.append(sample.seeded_faults_pct)
+        if simulation.finished:
+            break
+        sample = simulation.step()
+    stamps_s = np.array(stamps)
+    return (
+        EstimateSeries(step.published_names, stamps_s, np.array(values),
+                       np.array(statuses), np.array(times_ms), np.array(cpu_ms),
+                       step.config.solver.method),
+        SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
+    )
+
+
+class GridFlight(NamedTuple):
+    """A simulated flight every period_s: times_s (K,) [s], states (K, 14), controls (K, 7),
+    seeded faults (K, 7) [%], in uav_common.channels order, the measured true airspeed
+    (K,) [m/s] (NaN without air data) and the autopilot's setpoints (K, 3) (SETPOINT_FIELDS
+    order)."""
+
+    times_s: np.ndarray
+    states: np.ndarray
+    controls: np.ndarray
+    seeded_pct: np.ndarray
+    airspeed_mps: np.ndarray
+    setpoints: np.ndarray
+
+    @property
+    def detector_flight(self) -> DetectorFlight:
+        """What the detector takes of it."""
+        return DetectorFlight(self.times_s, self.states, self.controls, self.airspeed_mps,
+                              self.setpoints)
+
+
+def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
+    """The scenario's samples every period_s [s] of simulation time (a multiple of the
+    sensor period)."""
+    simulation = Simulation(scenario)
+    every = round(period_s / simulation.period_s)
+    if every < 1 or not on_grid(period_s, simulation.period_s):
+        raise ValueError(f"{period_s} s is not a multiple of the sensor period "
+                         f"{simulation.period_s} s")
+    samples = [simulation.sample()]
+    while not simulation.finished:
+        sample = simulation.step()
+        if simulation.sample_count % every == 0:
+            samples.append(sample)
+    return GridFlight(np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
+                      np.array([s.controls for s in samples]),
+                      np.array([s.seeded_faults_pct for s in samples]),
+                      np.array([math.nan if s.air_data is None else s.air_data[_AIRSPEED]
+                                for s in samples]),
+                      np.array([s.setpoints for s in samples]))
+
+
+def fly_on_grid_each(campaign: Campaign, scenarios: Sequence[Scenario],
+                     period_s: float) -> list[GridFlight]:
+    """fly_on_grid of every scenario, as the campaign runs them (CampaignFailedError naming the
+    flights that failed, once the others are done)."""
+    return campaign.results(functools.partial(fly_on_grid, period_s=period_s), scenarios,
+                            "flights")
+
+
+def sensor_flight(scenario: Scenario) -> SensorFlight:
+    """The scenario's samples at the sensor rate as a recording of them gives them (what a
+    model calibration reads)."""
+    simulation = Simulation(scenario)
+    samples = [simulation.sample()]
+    while not simulation.finished:
+        samples.append(simulation.step())
+    return SensorFlight(
+        f"scenario '{scenario.name}' seed {scenario.seed}",
+        np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
+        np.array([s.controls for s in samples]),
+        np.array([s.wind_filtered_ned_mps for s in samples]),
+        np.array([np.full(3, math.nan) if s.air_data is None else s.air_data
+                  for s in samples]))
+
+
+def fault_free_residuals(scenario: Scenario) -> np.ndarray:
+    """The residuals (K, 6) residual_node would publish for the scenario with its default
+    parameters, on the update grid, where every row is valid. (y does not depend on S:
+    the sensitivities' model copies are left out.)"""
+    sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
+                                "vehicle": scenario.vehicle, "fault_names": []})
+    simulation = Simulation(scenario)
+    sample, rows = simulation.sample(), []
+    while True:
+        result = sampler.update(sample.time_s, sample.state, sample.controls,
+                                sample.wind_filtered_ned_mps, sample.air_data)
+        if result is not None and result.valid.all():
+            rows.append(result.residual)
+        if simulation.finished:
+            return np.array(rows)
+        sample = simulation.step()
+
+
+def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,
+                 wind_speed_mps: float) -> Scenario:
+    """The scenario with another turbulence seed and a horizontal background wind of
+    wind_speed_mps [m/s] blowing towards wind_direction_deg [deg from north]."""
+    direction = math.radians(wind_direction_deg)
+    wind = dataclasses.replace(scenario.wind, north_mps=wind_speed_mps * math.cos(direction),
+                               east_mps=wind_speed_mps * math.sin(direction))
+    return dataclasses.replace(scenario, seed=seed, wind=wind)
+
+
+def describe_flights(scenarios: Sequence[Scenario]) -> str:
+    """One line for a calibration file's header: which flights of which scenario."""
+    first = scenarios[0]
+    return (f"'{first.name}' ({first.duration_s:g} s each, {first.wind.turbulence} "
+            f"turbulence), seeds {', '.join(str(s.seed) for s in scenarios)}; winds "
+            "north/east [m/s] "
+            + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios))
+
+
+def fault_free_flights(count: int, first_seed: int, first_direction_deg: float = 0.0,
+                       vehicle: str = DEFAULT_VEHICLE) -> list[Scenario]:
+    """count variants of the vehicle's fault-free scenario (its default flight in its own
+    turbulence and sensors): seeds from first_seed, background winds of 20-25 % of its
+    airspeed (5.0-6.25 m/s at 25 m/s) towards directions 360/count degrees apart from
+    first_direction_deg. The detector's calibration flights and, with other seeds, its
+    held-out test flights."""
+    base = load_scenario(vehicle_scenario_path(vehicle, "fault_free"))
+    airspeed_mps = base.initial.airspeed_mps
+    return [wind_variant(base, first_seed + i, first_direction_deg + 360.0 * i / count,
+                         airspeed_mps * (20 + i % 6) / 100) for i in range(count)]
