@@ -56,7 +56,7 @@ from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
 )
-from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.detection.calibration_fit import calibrate_scheduled
 from uav_fault_estimator.detection.detector import DetectorFlight, DetectorSample
 from uav_fault_estimator.detection.generators import generator_names
 from uav_fault_estimator.flight_logs import keipour2019_rls as peer
@@ -139,16 +139,11 @@ def labelled_flights(truths: dict[Path, FlightTruth], airframe: Path,
 def calibrator(arguments: argparse.Namespace, airframe_name: str):
     """calibrate(fault-free parts) -> Calibration with the benchmark's settings."""
     def calibrated(flights: Sequence[DetectorFlight]) -> Calibration:
-        def made(scheduled: bool) -> Calibration:
-            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, arguments.forgetting_factor,
-                             arguments.window, arguments.settle_s, airframe=airframe_name,
-                             scheduled=scheduled, generators=arguments.generators)
-        if arguments.schedule == "auto":
-            try:
-                return made(True)
-            except ValueError:  # too narrow a span of airspeeds: no schedule
-                pass
-        return made(False)
+        return calibrate_scheduled(
+            flights, arguments.schedule, sample_period_s=DEFAULT_SAMPLE_PERIOD_S,
+            forgetting_factor=arguments.forgetting_factor, window=arguments.window,
+            settle_s=arguments.settle_s, airframe=airframe_name,
+            generators=arguments.generators)[0]
 
     return calibrated
 

@@ -68,10 +68,13 @@ from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
-    Calibration,
 )
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict, read_calibration
-from uav_fault_estimator.detection.calibration_fit import calibrate
+from uav_fault_estimator.detection.calibration_fit import (
+    SCHEDULES,
+    ScheduleError,
+    calibrate_scheduled,
+)
 from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
@@ -100,7 +103,6 @@ from uav_fault_estimator.flight_logs.screening import (
 )
 
 PROGRAM = "screen_logs.py"
-SCHEDULES = ("auto", "airspeed", "none")
 
 
 class BadInputError(Exception):
@@ -173,26 +175,18 @@ def calibrate_logs(arguments: argparse.Namespace) -> None:
              for name, log in logs.items() if name not in unlabelled]
     flights = [part for part in parts if part is not None]
 
-    def calibrated(scheduled: bool) -> Calibration:
-        try:
-            return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, arguments.forgetting_factor,
-                             arguments.window, arguments.settle_s, airframe=airframe.name,
-                             scheduled=scheduled, generators=arguments.generators)
-        except ValueError as error:
-            if "airspeed" in str(error):  # the schedule's: the caller decides
-                raise
-            raise BadInputError(str(error)) from None
-
-    if arguments.schedule == "none":
-        calibration = calibrated(False)
-    else:
-        try:
-            calibration = calibrated(True)
-        except ValueError as error:  # the airspeeds' span or missing airspeeds
-            if arguments.schedule == "airspeed":
-                raise BadInputError(f"no airspeed schedule: {error}") from None
-            print(f"no airspeed schedule: {error}")
-            calibration = calibrated(False)
+    try:
+        calibration, unscheduled = calibrate_scheduled(
+            flights, arguments.schedule, sample_period_s=DEFAULT_SAMPLE_PERIOD_S,
+            forgetting_factor=arguments.forgetting_factor, window=arguments.window,
+            settle_s=arguments.settle_s, airframe=airframe.name,
+            generators=arguments.generators)
+    except ScheduleError as error:
+        raise BadInputError(f"no airspeed schedule: {error}") from None
+    except ValueError as error:
+        raise BadInputError(str(error)) from None
+    if unscheduled:
+        print(f"no airspeed schedule: {unscheduled}")
     print(f"airspeed schedule: reference {calibration.reference_airspeed_mps:.2f} m/s"
           if calibration.scheduled else "airspeed schedule: none")
     header = (f"# Written by scripts/screen_logs.py calibrate for the airframe "

@@ -6,6 +6,7 @@ statistics. No ROS here."""
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -62,9 +63,9 @@ def calibrate(flights: Sequence[Sequence[np.ndarray]], sample_period_s: float,
     flights on the sample grid (DetectorFlight, or (times, states, controls) without
     airspeed): the initial parameters, then, from the RLS and GLRT run over each flight from
     them, the parameters' spread and the Weibull fits of both statistics. scheduled: the
-    parameters' means affine in the filtered airspeed (airspeed_schedule); ValueError when
-    the flights' airspeeds span less than MIN_SCHEDULE_SPAN_MPS, or a generator has too few
-    samples."""
+    parameters' means affine in the filtered airspeed (airspeed_schedule); ScheduleError when
+    the flights' airspeeds span less than MIN_SCHEDULE_SPAN_MPS, ValueError when a generator
+    has too few samples."""
     generators = checked_generators(tuple(generators))
     flights = [detector_flight(flight) for flight in flights]
     initial = fit_initial_parameters(flights, generators, sample_period_s, forgetting_factor)
@@ -93,17 +94,42 @@ def calibrate(flights: Sequence[Sequence[np.ndarray]], sample_period_s: float,
                        weibull_fit(deviation), airframe, reference)
 
 
+class ScheduleError(ValueError):
+    """Calibration flights that cannot give an airspeed schedule (one line: why)."""
+
+
+# How a calibration command schedules: on airspeed where the flights allow it (auto), on
+# airspeed or not at all (airspeed: refused otherwise), never (none).
+SCHEDULES = ("auto", "airspeed", "none")
+
+
+def calibrate_scheduled(flights: Sequence[Sequence[np.ndarray]], schedule: str,
+                        **settings: Any) -> tuple[Calibration, str | None]:
+    """calibrate(flights, **settings) scheduled as `schedule` (SCHEDULES) says; and, when auto
+    found no schedule, why (None otherwise). ScheduleError when `airspeed` cannot be had."""
+    if schedule not in SCHEDULES:
+        raise ValueError(f"schedule {schedule!r}: expected one of {', '.join(SCHEDULES)}")
+    if schedule != "none":
+        try:
+            return calibrate(flights, scheduled=True, **settings), None
+        except ScheduleError as error:
+            if schedule == "airspeed":
+                raise
+            return calibrate(flights, scheduled=False, **settings), str(error)
+    return calibrate(flights, scheduled=False, **settings), None
+
+
 def airspeed_reference(airspeeds_mps: np.ndarray) -> float:
-    """U_ref of a schedule: the calibration samples' median airspeed [m/s]; ValueError when
-    they have none or span less than MIN_SCHEDULE_SPAN_MPS (5th to 95th percentile)."""
+    """U_ref of a schedule: the calibration samples' median airspeed [m/s]; ScheduleError
+    when they have none or span less than MIN_SCHEDULE_SPAN_MPS (5th to 95th percentile)."""
     known = airspeeds_mps[np.isfinite(airspeeds_mps)]
     if known.size < airspeeds_mps.size or known.size == 0:
-        raise ValueError("an airspeed schedule needs the airspeed of every calibration "
+        raise ScheduleError("an airspeed schedule needs the airspeed of every calibration "
                          f"sample; {airspeeds_mps.size - known.size} of {airspeeds_mps.size} "
                          "have none")
     low, high = np.percentile(known, [5.0, 95.0])
     if high - low < MIN_SCHEDULE_SPAN_MPS:
-        raise ValueError(f"the calibration flights span {low:.1f}-{high:.1f} m/s of airspeed: "
+        raise ScheduleError(f"the calibration flights span {low:.1f}-{high:.1f} m/s of airspeed: "
                          f"an airspeed schedule needs at least {MIN_SCHEDULE_SPAN_MPS:g} m/s "
                          "(fly them at several speeds, or calibrate without a schedule)")
     return float(np.median(known))
