@@ -85,6 +85,18 @@ def test_an_integer_is_taken_for_the_real_it_names_and_nothing_else_is_converted
         checked_value("x", [1.0, 11.0], Parameter.Type.DOUBLE_ARRAY, real)
 
 
+@pytest.mark.timeout(10)
+def test_an_empty_choice_is_listed_with_what_it_means():
+    spec = sim_node.PARAMETERS["vehicle"]
+    assert checked_value("vehicle", "", Parameter.Type.STRING, spec) == ""
+    with pytest.raises(ParameterError) as refused:
+        checked_value("vehicle", "cessna", Parameter.Type.STRING, spec)
+    assert str(refused.value) == ("parameter vehicle: 'cessna' is not a choice; it must be one "
+                                  "of '' (the scenario's), aerosonde, carbon_z")
+    qos = sim_node.PARAMETERS["qos"]  # no empty choice: the names alone
+    assert qos.choices_text() == "reliable, sensor_data"
+
+
 @pytest.fixture
 def context():
     context = Context()
@@ -175,6 +187,10 @@ CASES = {
         "uav_fault_estimator", "mhe_node", ["-p", "prior_pct:=[0.0, 0.0, 2000.0, 0.0]"],
         "mhe_node: parameter prior_pct: 2000.0 is out of range; it must be a real list of "
         "values in [-1000, 1000]"),
+    "vehicle_unknown": (
+        "uav_sim", "sim_node", ["-p", "vehicle:=cessna"],
+        "sim_node: parameter vehicle: 'cessna' is not a choice; it must be one of '' (the "
+        "scenario's), aerosonde, carbon_z"),
     "sensor_rate_zero": (
         "uav_sim", "sim_node", ["-p", "sensor_rate_hz:=0.0"],
         "sim_node: parameter sensor_rate_hz: 0.0 is out of range; it must be a real number in "
