@@ -100,8 +100,10 @@ def check_metrics(out: Path) -> dict:
     assert metrics["aircraft"]["model"] == shipped_model("aerosonde")
     for name in FIGURES:
         assert (out / name).stat().st_size > 10_000, name
-    for node in ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node"):
-        assert (out / "logs" / f"{node}.log").exists(), node
+    # each node's output once: no rcl log file beside it, nor one of the demo's own
+    assert {path.name for path in (out / "logs").glob("*.log")} == {
+        f"{node}.log" for node in ("sim_node", "residual_node", "mhe_node", "detector_node",
+                                   "recorder_node")}
     return metrics
 
 

@@ -51,6 +51,7 @@ import yaml
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
 from uav_common.ros_processes import (
+    NO_LOG_FILE_ROS_ARGS,
     RosProcess,
     exit_status_text,
     fast_flight_ros_args,
@@ -135,8 +136,10 @@ class Progress:
 
         self._rclpy = rclpy
         self.context = rclpy.Context()
-        # Ctrl-C stays Python's KeyboardInterrupt, handled by the demo
-        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        # Ctrl-C stays Python's KeyboardInterrupt, handled by the demo; no rcl log file in
+        # the run's logs/ (the node logs nothing)
+        rclpy.init(args=["--ros-args", *NO_LOG_FILE_ROS_ARGS], context=self.context,
+                   signal_handler_options=SignalHandlerOptions.NO)
         self.node = rclpy.create_node("_demo", context=self.context,
                                       start_parameter_services=False, enable_rosout=False)
         self.executor = SingleThreadedExecutor(context=self.context)
