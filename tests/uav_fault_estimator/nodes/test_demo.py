@@ -66,17 +66,19 @@ def run_dir(tmp_path: Path) -> Iterator[Path]:
         kill_all(nodes_logging_under(tmp_path))
 
 
-def start_demo(start_process, scenario: Path, out: Path) -> RosProcess:
-    return start_process([str(DEMO), str(scenario), "--out", str(out)], "demo")
+def start_demo(start_process, scenario: Path, out: Path, *arguments: str) -> RosProcess:
+    return start_process([str(DEMO), str(scenario), "--out", str(out), *arguments], "demo")
 
 
-def fly(start_process, scenario: Path, out: Path, timeout_s: float = 100) -> str:
-    """Run the demo to its end; its output (status 0 asserted)."""
-    demo = start_demo(start_process, scenario, out)
-    status = demo.wait(timeout_s)
+def fly(start_process, scenario: Path, out: Path, timeout_s: float = 100, status: int = 0,
+        *arguments: str) -> str:
+    """Run the demo to its end, with the further arguments; its output (the exit status
+    asserted: 0, done and the targets met, unless said)."""
+    demo = start_demo(start_process, scenario, out, *arguments)
+    ended = demo.wait(timeout_s)
     output = demo.output()
     print(output)
-    assert status == 0, output
+    assert ended == status, output
     assert not nodes_logging_under(out)
     return output
 
@@ -213,7 +215,12 @@ def test_a_two_fault_flight_gives_its_metrics(start_process, short_scenario, run
     two-aircraft test.)"""
     scenario = short_scenario(DURATION_S, faults=TWO_FAULTS,
                               estimator={"solver_method": "active_set"})
-    output = fly(start_process, scenario, run_dir)
+    # 60 s after its step the drag's RMS error is still above 15 % of it: the targets were
+    # set for five-minute flights (docs/estimator.md#targets)
+    output = fly(start_process, scenario, run_dir, 100, 3)
+    assert re.search(r"^demo: done in [\d.]+ s of wall time; targets \(docs/estimator.md"
+                     r"#targets\): missed: left_wing_drag_increase RMS [\d.]+ % of 25$",
+                     output, re.MULTILINE), output
     assert re.search(r"^  t = 30 / 120 s, \d+ estimates$", output, re.MULTILINE), output
     assert "right_wing_lift_loss" in output and "pipeline: 240/240 estimates" in output
     metrics = check_metrics(run_dir)

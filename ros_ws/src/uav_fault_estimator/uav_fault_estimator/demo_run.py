@@ -13,6 +13,8 @@ runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures 
 parameters. --model-calibration (scripts/calibrate_model.py's file): residual_node's models
 are the calibrated aircraft (model_calibration_file), and mhe_node takes the noise
 calibration made on the same flights (noise_calibration_file) where the file names one.
+The last line says whether each vehicle's run met the estimator's default targets
+(reporting/targets.py).
 
 Several scenarios fly several aircraft in the one domain: vehicle k flies the k-th under
 the namespace /uavk with nodes of its own, the first simulator publishes /clock and the
@@ -28,10 +30,10 @@ marks with the file .uav-demo-run. A run into a marked folder replaces the bag/ 
 the earlier one; a folder that exists, is not empty and has no mark is refused, as is an
 --out that is a file or cannot be written.
 
-Exit status: 0 done; 1 a node ended on its own during the run (its name and exit status are
-printed; the recording so far is left readable) or the report failed; 2 a bad argument,
-scenario or output folder (one line, before any process starts); 130 interrupted (Ctrl-C,
-SIGTERM).
+Exit status: 0 done, the targets met; 1 a node ended on its own during the run (its name
+and exit status are printed; the recording so far is left readable) or the report failed; 2
+a bad argument, scenario or output folder (one line, before any process starts); 3 done,
+a target missed (the last line says which); 130 interrupted (Ctrl-C, SIGTERM).
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ from uav_sim.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator import node_graph
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError
+from uav_fault_estimator.reporting import targets
 from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
 
@@ -79,6 +82,7 @@ OUTPUT_SUBSCRIBERS = {"residual_node": 2, "mhe_node": 2, "detector_node": 1}
 RECORDER = "/recorder_node"  # its status on /diagnostics counts what it has recorded
 OUTPUT_MARK = ".uav-demo-run"  # in an output folder the demo made: its bag/ and logs/ are its own
 REPLACED = ("bag", "logs")  # what a run replaces of an earlier one in the same folder
+EXIT_TARGET_MISSED = 3
 
 
 def subscribers_args(executable: str) -> list[str]:
@@ -387,6 +391,15 @@ def prepare_output(out: Path, *scenario_paths: Path) -> None:
             f"cannot write into the output folder {out} ({reason}); {what_to_do}") from None
 
 
+def targets_line(verdicts: list[tuple[str, targets.Verdict | None]]) -> str:
+    """Whether each vehicle's run (by namespace; "" alone) met the targets, in one line;
+    None: its report failed."""
+    said = [(f"{namespace} " if namespace else "")
+            + (verdict.text() if verdict else "no report to judge")
+            for namespace, verdict in verdicts]
+    return f"targets ({targets.TARGETS_PAGE}): " + "; ".join(said)
+
+
 def check_one_clock(scenarios: list[Scenario]) -> None:
     """ScenarioError unless the scenarios last as long: the vehicles fly on one clock."""
     durations = sorted({scenario.duration_s for scenario in scenarios})
@@ -434,8 +447,8 @@ def main(runs_dir: Path) -> int:
     """demo.sh's command line; runs_dir: where the default output folders go."""
     parser = argparse.ArgumentParser(
         prog="demo.sh", description=__doc__.splitlines()[0],
-        epilog="Exit status: 0 done, 1 a node or the report failed, 2 bad arguments or "
-        "scenario, 130 interrupted.")
+        epilog="Exit status: 0 done and the targets met, 1 a node or the report failed, 2 "
+        "bad arguments or scenario, 3 done and a target missed, 130 interrupted.")
     parser.add_argument("scenarios", nargs="*", type=Path, metavar="scenario",
                         help="scenario YAML (default: the shipped default scenario); several: "
                         "one aircraft each, under /uav1, /uav2, ...")
@@ -517,6 +530,7 @@ def main(runs_dir: Path) -> int:
         return status
 
     missing = False
+    verdicts: list[tuple[str, targets.Verdict | None]] = []
     for vehicle in vehicles:
         report_out = out / vehicle.namespace.strip("/")
         try:
@@ -526,6 +540,7 @@ def main(runs_dir: Path) -> int:
             print(f"demo: no report{' of ' + vehicle.namespace if vehicle.namespace else ''}: "
                   f"{error}", file=sys.stderr)
             missing = True
+            verdicts.append((vehicle.namespace, None))
             continue
         except KeyboardInterrupt:
             print("\ndemo: interrupted while writing the report", file=sys.stderr)
@@ -534,6 +549,8 @@ def main(runs_dir: Path) -> int:
         if vehicle.namespace:
             print(f"{vehicle.namespace}:")
         print(table(metrics))
+        verdicts.append((vehicle.namespace, targets.judge(
+            metrics["faults"], metrics["false_alarms"], targets.reached_late(vehicle.scenario))))
         print(f"written to {report_out}: " + ("" if vehicle.namespace else "bag/, logs/, ")
               + "metrics.json, " + ", ".join(path.name for path in figures))
         if received[vehicle.namespace] < demo.expected:
@@ -545,8 +562,11 @@ def main(runs_dir: Path) -> int:
     for namespace, (name, status) in demo.failed.items():
         print(f"demo: {namespace} failed: {name} exited with {exit_status_text(status)} "
               "during the run", file=sys.stderr)
-    print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time")
-    return 1 if failed or missing or demo.failed else 0
+    print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time; "
+          + targets_line(verdicts))
+    if failed or missing or demo.failed:
+        return 1
+    return EXIT_TARGET_MISSED if any(v and v.missed for _, v in verdicts) else 0
 
 
 def _stop(demo: Demo) -> list[str]:
