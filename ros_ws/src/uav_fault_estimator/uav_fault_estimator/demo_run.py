@@ -427,7 +427,7 @@ def cut_note(scenario: Scenario, duration_s: float) -> str:
     start later are not reached."""
     note = (f"scenario '{scenario.name}' cut at {duration_s:g} s of its "
             f"{scenario.duration_s:g} s (--duration)")
-    later = [fault for fault in scenario.faults if fault.start_s >= duration_s]
+    later = [fault for fault in scenario.faults if fault.start_s > duration_s]
     if later:
         note += ": not reached, starting later: " + ", ".join(
             f"{fault.name} at {fault.start_s:g} s" for fault in later)
