@@ -125,7 +125,8 @@ main() {
         check_tools
         build_workspace "$build_wanted"
     fi
-    note "ready: source scripts/env.sh"
+    # a status, not a step to take: the launchers that run this go on by themselves
+    note "the workspace is up to date (a shell of your own gets it with: source scripts/env.sh)"
 }
 
 main "$@"

@@ -90,8 +90,8 @@ def range_text(spec: ParameterSpec, markdown: bool = True) -> str:
         parts.append(f"{spec.low:g}{EN_DASH}{spec.high:g}" if markdown
                      else f"range [{spec.low:g}, {spec.high:g}]")
     if spec.choices:
-        parts.append(", ".join(f"`{c}`" for c in spec.choices) if markdown
-                     else "one of " + ", ".join(spec.choices))
+        parts.append(", ".join(f"`{c}`" if c else spec.choice_text(c) for c in spec.choices)
+                     if markdown else "one of " + spec.choices_text())
     return ", ".join(parts + (["live"] if spec.live else []))
 
 

@@ -438,8 +438,8 @@ def demo_run(metrics: Mapping[str, Any]) -> list[str]:
     """One run's metrics.json: the demo's table, with its solver and pipeline figures."""
     lines = [f"#### Scenario `{metrics.get('scenario')}`", "",
              f"{number(metrics.get('duration_s'))} s, settle {number(metrics.get('settle_s'))}"
-             f" s, threshold {number(metrics.get('detection_threshold_pct'))} %; false "
-             f"alarms: {', '.join(metrics.get('false_alarms') or []) or 'none'}; guidance "
+             f" s, threshold {number(metrics.get('detection_threshold_pct'))} %; estimator "
+             f"false alarms: {', '.join(metrics.get('false_alarms') or []) or 'none'}; guidance "
              f"{(metrics.get('aircraft') or {}).get('guidance') or '-'}.", ""]
     keys = ("seeded", "seeded_final_pct", "estimate_final_pct", "rmse_pct",
             "max_abs_error_pct", "detection_delay_s")

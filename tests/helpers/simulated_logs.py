@@ -101,10 +101,11 @@ class LogTruth:
     grid: DetectorFlight
 
 
-def simulate_truth(scenario: Scenario, seed: int) -> LogTruth:
+def simulate_truth(scenario: Scenario, seed: int,
+                   airframe: Path = FIXTURE_AIRFRAME) -> LogTruth:
     """Fly the scenario at 120 Hz and pick each stream's instants (TIMINGS, jitter from
-    seed): body rates, attitude, airspeed (measured, as on board), the outputs' PWM and the
-    ground velocity."""
+    seed): body rates, attitude, airspeed (measured, as on board), the outputs' PWM (by the
+    airframe file's map) and the ground velocity."""
     simulation = Simulation(scenario, SENSOR_RATE_HZ)
     samples = [simulation.sample()]
     while not simulation.finished:
@@ -122,7 +123,7 @@ def simulate_truth(scenario: Scenario, seed: int) -> LogTruth:
         ATTITUDE: states[:, state_columns[ATTITUDE]],
         GROUND_VELOCITY: states[:, state_columns[GROUND_VELOCITY]],
         AIRSPEED: airspeed[:, None],
-        OUTPUTS: pwm_outputs(controls),
+        OUTPUTS: pwm_outputs(controls, airframe),
         SURFACES: controls[:, [CONTROL_CHANNELS.index(c) for c in STREAM_COLUMNS[SURFACES]]],
     }
     every = round(DEFAULT_SAMPLE_PERIOD_S * SENSOR_RATE_HZ)
@@ -146,10 +147,11 @@ def fixture_airframe() -> dict:
     return yaml.safe_load(FIXTURE_AIRFRAME.read_text())
 
 
-def pwm_outputs(controls: np.ndarray) -> np.ndarray:
+def pwm_outputs(controls: np.ndarray, airframe_file: Path = FIXTURE_AIRFRAME) -> np.ndarray:
     """The PWM [us, integers] (n, outputs) of controls (n, 7) in CONTROL_CHANNELS order: the
-    inverse of fixture_airframe.yaml's map (airframe.py's formulas), then its copies."""
-    airframe = fixture_airframe()
+    inverse of the airframe file's map (airframe.py's formulas; by default
+    fixture_airframe.yaml, the outputs' truth), then its copies."""
+    airframe = yaml.safe_load(airframe_file.read_text())
     surfaces, mixed = airframe["surfaces"], airframe.get("mixed", [])
     count = max([s["output"] for s in surfaces.values()] + [m["output"] for m in mixed])
     pwm = np.zeros((controls.shape[0], count))

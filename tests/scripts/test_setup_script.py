@@ -69,4 +69,5 @@ def test_second_run_with_nothing_changed_redoes_nothing() -> None:
         [str(REPO_ROOT / "scripts" / "setup.sh")], capture_output=True, text=True, timeout=50
     )
     assert result.returncode == 0, result.stderr
-    assert result.stderr.strip() == "setup.sh: ready: source scripts/env.sh"
+    assert result.stderr.strip() == ("setup.sh: the workspace is up to date (a shell of your "
+                                     "own gets it with: source scripts/env.sh)")

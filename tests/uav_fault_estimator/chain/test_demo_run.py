@@ -32,7 +32,7 @@ from uav_fault_estimator.estimation.model_file import shipped_model
 from uav_fault_estimator.recording.project_bag import project_typestore, read_topics
 from uav_fault_estimator.reporting import report
 from uav_sim.paths import scenarios_dir
-from uav_sim.scenario import load_scenario
+from uav_sim.scenario import default_scenario_path, load_scenario
 
 pytestmark = pytest.mark.integration
 
@@ -66,17 +66,19 @@ def run_dir(tmp_path: Path) -> Iterator[Path]:
         kill_all(nodes_logging_under(tmp_path))
 
 
-def start_demo(start_process, scenario: Path, out: Path) -> RosProcess:
-    return start_process([str(DEMO), str(scenario), "--out", str(out)], "demo")
+def start_demo(start_process, scenario: Path, out: Path, *arguments: str) -> RosProcess:
+    return start_process([str(DEMO), str(scenario), "--out", str(out), *arguments], "demo")
 
 
-def fly(start_process, scenario: Path, out: Path, timeout_s: float = 100) -> str:
-    """Run the demo to its end; its output (status 0 asserted)."""
-    demo = start_demo(start_process, scenario, out)
-    status = demo.wait(timeout_s)
+def fly(start_process, scenario: Path, out: Path, timeout_s: float = 100, status: int = 0,
+        *arguments: str) -> str:
+    """Run the demo to its end, with the further arguments; its output (the exit status
+    asserted: 0, done and the targets met, unless said)."""
+    demo = start_demo(start_process, scenario, out, *arguments)
+    ended = demo.wait(timeout_s)
     output = demo.output()
     print(output)
-    assert status == 0, output
+    assert ended == status, output
     assert not nodes_logging_under(out)
     return output
 
@@ -100,9 +102,53 @@ def check_metrics(out: Path) -> dict:
     assert metrics["aircraft"]["model"] == shipped_model("aerosonde")
     for name in FIGURES:
         assert (out / name).stat().st_size > 10_000, name
-    for node in ("sim_node", "residual_node", "mhe_node", "detector_node", "recorder_node"):
-        assert (out / "logs" / f"{node}.log").exists(), node
+    # each node's output once: no rcl log file beside it, nor one of the demo's own
+    assert {path.name for path in (out / "logs").glob("*.log")} == {
+        f"{node}.log" for node in ("sim_node", "residual_node", "mhe_node", "detector_node",
+                                   "recorder_node")}
     return metrics
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(150)
+def test_a_shorter_flight_says_what_it_cut_and_what_it_did_not_judge(start_process,
+                                                                     run_dir) -> None:
+    """The default scenario flown for its first 60 s (--duration): the copy sim_node flew,
+    the faults starting later not reached (said at the start and in the report, and not
+    seeded in metrics.json), the lift ramp at 2 % since 58 s not judged, the run's verdict
+    its last line."""
+    output = fly(start_process, default_scenario_path(), run_dir, 100, 0, "--duration", "60")
+    note = ("scenario 'default' cut at 60 s of its 300 s (--duration): not reached, starting "
+            "later: left_wing_drag_increase at 110 s, left_wing_lift_loss at 170 s, "
+            "right_wing_drag_increase at 210 s")
+    lines = output.splitlines()
+    assert lines[1] == f"demo: {note}" and note in lines, output
+    assert lines[-1].endswith("s of wall time; targets (docs/estimator.md#targets): met (not "
+                              "judged, at the threshold within 10 s of the end: "
+                              "right_wing_lift_loss)"), output
+    flown = load_scenario(run_dir / "logs" / "scenario.yaml")
+    assert flown.duration_s == 60.0 and flown.faults == load_scenario(
+        default_scenario_path()).faults
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    assert metrics["duration_s"] == 60.0
+    assert metrics["pipeline"]["messages_received"] == 120
+    assert [name for name, entry in metrics["faults"].items() if entry["seeded"]] == [
+        "right_wing_lift_loss"]
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(("duration", "words"), [
+    ("400", "--duration 400 s is longer than the scenario 'default' (300 s): it cuts a "
+            "scenario short"),
+    ("-5", "--duration -5: a flight's duration is a positive number of seconds"),
+    ("nan", "--duration nan: a flight's duration is a positive number of seconds"),
+], ids=["longer", "negative", "nan"])
+def test_a_duration_that_cuts_nothing_short_is_one_line(duration, words, run_dir) -> None:
+    result = subprocess.run([str(DEMO), "--duration", duration, "--out", str(run_dir)],
+                            capture_output=True, text=True, timeout=50)
+    assert result.returncode == 2, result
+    assert result.stderr == f"demo: {words}\n"
+    assert not run_dir.exists()
 
 
 def bad_scenario_run(scenario: Path, out: Path) -> subprocess.CompletedProcess:
@@ -211,7 +257,12 @@ def test_a_two_fault_flight_gives_its_metrics(start_process, short_scenario, run
     two-aircraft test.)"""
     scenario = short_scenario(DURATION_S, faults=TWO_FAULTS,
                               estimator={"solver_method": "active_set"})
-    output = fly(start_process, scenario, run_dir)
+    # 60 s after its step the drag's RMS error is still above 15 % of it: the targets were
+    # set for five-minute flights (docs/estimator.md#targets)
+    output = fly(start_process, scenario, run_dir, 100, 3)
+    assert re.search(r"^demo: done in [\d.]+ s of wall time; targets \(docs/estimator.md"
+                     r"#targets\): missed: left_wing_drag_increase RMS [\d.]+ % of 25$",
+                     output, re.MULTILINE), output
     assert re.search(r"^  t = 30 / 120 s, \d+ estimates$", output, re.MULTILINE), output
     assert "right_wing_lift_loss" in output and "pipeline: 240/240 estimates" in output
     metrics = check_metrics(run_dir)

@@ -17,6 +17,7 @@ from uav_fault_estimator.chain.node_graph import (
 from uav_sim.paths import scenarios_dir
 
 SIM_TIME = ["-p", "use_sim_time:=true"]
+NO_LOG_FILE = ["--disable-external-lib-logs"]  # the launchers write each node's output
 VEHICLE = ["-p", "vehicle:=aerosonde"]  # the shipped scenarios' vehicle
 A, B = scenarios_dir() / "default.yaml", scenarios_dir() / "fault_free.yaml"
 
@@ -32,15 +33,16 @@ def test_several_aircraft_start_last_first_each_simulator_last():
         "foxglove_node"]
     sims = {node.key: node.ros_args for node in plan if node.executable == "sim_node"}
     # the first aircraft's simulator publishes /clock; every other node follows it
-    assert sims["uav1/sim_node"] == ["-r", "__ns:=/uav1", *VEHICLE, "-p", f"scenario:={A}"]
-    assert sims["uav2/sim_node"] == ["-r", "__ns:=/uav2", *VEHICLE, *SIM_TIME, "-p",
-                                     f"scenario:={B}"]
+    assert sims["uav1/sim_node"] == [*NO_LOG_FILE, "-r", "__ns:=/uav1", *VEHICLE, "-p",
+                                     f"scenario:={A}"]
+    assert sims["uav2/sim_node"] == [*NO_LOG_FILE, "-r", "__ns:=/uav2", *VEHICLE, *SIM_TIME,
+                                     "-p", f"scenario:={B}"]
     assert all(node.ros_args[-2:] == SIM_TIME for node in plan
                if node.executable != "sim_node")
     modelling = {"sim_node", "residual_node", "mhe_node", "detector_node"}
-    assert all((node.ros_args[2:4] == VEHICLE) == (node.executable in modelling)
+    assert all((node.ros_args[3:5] == VEHICLE) == (node.executable in modelling)
                for node in plan[:-1])
-    assert plan[-1].ros_args == SIM_TIME  # the whole graph's: no namespace
+    assert plan[-1].ros_args == [*NO_LOG_FILE, *SIM_TIME]  # the whole graph's: no namespace
 
 
 @pytest.mark.timeout(10)
@@ -48,12 +50,15 @@ def test_a_model_calibration_wires_residual_and_mhe_nodes_after_the_parameter_fi
     calibration = ModelCalibrationFiles(Path("/m.yaml"), Path("/n.yaml"))
     plan = {node.key: node.ros_args for node in live_plan(
         [], "/uav3", Path("/p.yaml"), calibration)}
-    assert plan["residual_node"] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", *VEHICLE,
-                                     "-p", "model_calibration_file:=/m.yaml", *SIM_TIME]
-    assert plan["mhe_node"][:8] == ["--params-file", "/p.yaml", "-r", "__ns:=/uav3", *VEHICLE,
-                                    "-p", "noise_calibration_file:=/n.yaml"]
+    assert plan["residual_node"] == ["--params-file", "/p.yaml", *NO_LOG_FILE, "-r",
+                                     "__ns:=/uav3", *VEHICLE, "-p",
+                                     "model_calibration_file:=/m.yaml", *SIM_TIME]
+    assert plan["mhe_node"][:9] == ["--params-file", "/p.yaml", *NO_LOG_FILE, "-r",
+                                    "__ns:=/uav3", *VEHICLE, "-p",
+                                    "noise_calibration_file:=/n.yaml"]
     assert "model_calibration_file:=/m.yaml" not in plan["mhe_node"]
-    assert node_ros_args("detector_node", "", False, calibration) == [*VEHICLE, *SIM_TIME]
+    assert node_ros_args("detector_node", "", False, calibration) == [*NO_LOG_FILE, *VEHICLE,
+                                                                      *SIM_TIME]
 
 
 @pytest.mark.timeout(30)

@@ -14,6 +14,7 @@ from uav_fault_estimator.estimation.estimator_step import (
     EstimatorStep,
     RejectedSampleError,
     ResidualInput,
+    warm_up_text,
 )
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA
 
@@ -86,3 +87,16 @@ def test_columns_are_picked_by_name_and_only_the_faults_are_published():
     assert list(with_nuisance.estimated_names) == FAULTS + wind_errors
     assert result.published_pct.shape == (len(FAULTS),)
     assert result.window_pct.shape[1] == len(FAULTS)
+
+
+@pytest.mark.timeout(10)
+def test_the_warm_up_says_the_configured_prior_window_and_settle_time():
+    step = EstimatorStep({**mhe_parameters(), "prior_pct": [1.5, 0.0, 0.0, 0.0],
+                          "horizon": 80})
+    text = warm_up_text(step.config)
+    assert "the prior (1.5, 0, 0, 0 %) until the residuals are valid" in text
+    assert "meaningful from 20 s of simulation time on" in text
+    assert "the window holds the last 80 residuals" in text
+    # what it says of the waiting estimates holds: the prior, until a valid residual comes
+    first = step.update(dataclasses.replace(samples()[0], valid=np.zeros(6, dtype=bool)))
+    np.testing.assert_array_equal(first.published_pct, [1.5, 0.0, 0.0, 0.0])

@@ -9,10 +9,9 @@ import pytest
 from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_fault_estimator.reporting.metrics import fault_metrics
+from uav_fault_estimator.reporting.targets import DETECTED_WITHIN_S as DELAY_S
+from uav_fault_estimator.reporting.targets import RMSE_SHARE
 from uav_sim.scenario import load_scenario, vehicle_scenario_path
-
-RMSE_SHARE = 0.15  # of each seeded magnitude
-DELAY_S = 10.0  # after the seeded value reaches the threshold
 
 
 @pytest.mark.slow

@@ -37,8 +37,8 @@ def test_estimates_follow_the_residuals_and_find_a_lift_loss(short_scenario, gra
     estimates = received["/faults/estimate"]
     # each node subscribes to its inputs once its output is matched: residual_node's with
     # mhe_node, mhe_node's with this test; sim_node flies once residual_node listens
-    start_process(ros2_run_argv("uav_fault_estimator", "mhe_node",
-                                ros_args=["-p", "wait_for_subscribers:=1"]), "mhe_node")
+    mhe = start_process(ros2_run_argv("uav_fault_estimator", "mhe_node",
+                                      ros_args=["-p", "wait_for_subscribers:=1"]), "mhe_node")
     start_process(ros2_run_argv("uav_fault_estimator", "residual_node",
                                 ros_args=["-p", "wait_for_subscribers:=1"]), "residual_node")
     scenario = short_scenario(DURATION_S, wind=CALM, faults=[LIFT_LOSS])
@@ -64,6 +64,9 @@ def test_estimates_follow_the_residuals_and_find_a_lift_loss(short_scenario, gra
     assert values["right_wing_lift_loss"] == pytest.approx(10.0, abs=1.0)
     others = [value for name, value in values.items() if name != "right_wing_lift_loss"]
     assert max(others) < 1.0
+    # said once at start, so that a flight in real time does not look stuck
+    assert mhe.output().count("the estimates are the prior (0, 0, 0, 0 %) until the "
+                              "residuals are valid") == 1, mhe.output()
 
 
 @pytest.mark.timeout(60)

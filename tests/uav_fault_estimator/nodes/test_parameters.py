@@ -30,12 +30,14 @@ from uav_fault_estimator.nodes import (
     recorder_node,
     residual_node,
 )
+from uav_sim.paths import scenarios_dir
 from uav_sim.ros import sim_node
 
 NODES = {"sim_node": sim_node.PARAMETERS, "residual_node": residual_node.PARAMETERS,
          "mhe_node": mhe_node.PARAMETERS, "detector_node": detector_node.PARAMETERS,
          "recorder_node": recorder_node.PARAMETERS, "foxglove_node": foxglove_node.PARAMETERS,
          "log_replay_node": log_replay_node.PARAMETERS}
+SCENARIO = scenarios_dir() / "default.yaml"
 NUMBERS = (Parameter.Type.INTEGER, Parameter.Type.DOUBLE, Parameter.Type.INTEGER_ARRAY,
            Parameter.Type.DOUBLE_ARRAY)
 MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
@@ -83,6 +85,18 @@ def test_an_integer_is_taken_for_the_real_it_names_and_nothing_else_is_converted
     with pytest.raises(ParameterError, match=r"^parameter x: 11.0 is out of range; it must be "
                                              r"a real list of values in \[0, 10\]$"):
         checked_value("x", [1.0, 11.0], Parameter.Type.DOUBLE_ARRAY, real)
+
+
+@pytest.mark.timeout(10)
+def test_an_empty_choice_is_listed_with_what_it_means():
+    spec = sim_node.PARAMETERS["vehicle"]
+    assert checked_value("vehicle", "", Parameter.Type.STRING, spec) == ""
+    with pytest.raises(ParameterError) as refused:
+        checked_value("vehicle", "cessna", Parameter.Type.STRING, spec)
+    assert str(refused.value) == ("parameter vehicle: 'cessna' is not a choice; it must be one "
+                                  "of '' (the scenario's), aerosonde, carbon_z")
+    qos = sim_node.PARAMETERS["qos"]  # no empty choice: the names alone
+    assert qos.choices_text() == "reliable, sensor_data"
 
 
 @pytest.fixture
@@ -175,6 +189,16 @@ CASES = {
         "uav_fault_estimator", "mhe_node", ["-p", "prior_pct:=[0.0, 0.0, 2000.0, 0.0]"],
         "mhe_node: parameter prior_pct: 2000.0 is out of range; it must be a real list of "
         "values in [-1000, 1000]"),
+    "vehicle_unknown": (
+        "uav_sim", "sim_node", ["-p", "vehicle:=cessna"],
+        "sim_node: parameter vehicle: 'cessna' is not a choice; it must be one of '' (the "
+        "scenario's), aerosonde, carbon_z"),
+    "noise_calibration_file_a_scenario": (
+        "uav_fault_estimator", "mhe_node", ["-p", f"noise_calibration_file:={SCENARIO}"],
+        f"mhe_node: noise calibration {SCENARIO}: not a noise calibration "
+        "(scripts/calibrate_estimator.py's file, a vehicle's residual_noise.yaml), whose keys "
+        "are vehicle, air_data, filtered_wind; this file holds the keys name, duration_s, seed, "
+        "initial, waypoints_ne_m, guidance, wind, sensors, faults"),
     "sensor_rate_zero": (
         "uav_sim", "sim_node", ["-p", "sensor_rate_hz:=0.0"],
         "sim_node: parameter sensor_rate_hz: 0.0 is out of range; it must be a real number in "

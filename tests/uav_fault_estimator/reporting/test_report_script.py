@@ -3,6 +3,7 @@ naming the recording and exit status 2, never a traceback."""
 
 from __future__ import annotations
 
+import json
 import os
 import random
 import shutil
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers.repo import SCRIPTS
+from helpers.repo import REPO_ROOT, SCRIPTS
 from uav_aircraft.flown_aircraft import FlownAircraft, SensorBias
 from uav_fault_estimator.recording.project_bag import (
     Recording,
@@ -184,6 +185,28 @@ def test_the_table_of_a_flight_shorter_than_settling_shows_no_figures():
     lines = report.table(metrics).splitlines()
     assert lines[2].split() == ["right_wing_lift_loss", "yes", "1.00", "1.00", "-", "-", "-"]
     assert lines[1].index("delay s") + len("delay s") == len(lines[2])  # still aligned
+
+
+@pytest.mark.timeout(30)
+def test_the_table_tells_the_estimators_figures_from_the_detectors():
+    """The Carbon-Z demo's metrics (docs/demo_carbon_z_default.json): its "none" is the
+    estimator's false alarms, its yaw test's 5 fault-free alarms the detector's; each delay
+    says what it counts from."""
+    metrics = json.loads((REPO_ROOT / "docs" / "demo_carbon_z_default.json").read_text())
+    lines = report.table(metrics).splitlines()
+    rows = 2 + len(metrics["faults"])
+    assert lines[rows:rows + 4] == [
+        "  (the estimator, mhe_node, per fault [%]: the seeded value and its estimate at the end,",
+        "  the estimate's RMS and largest error after settle; delay s: from the seeded value",
+        "  reaching the threshold to the estimate reaching it)",
+        "estimator false alarms (an estimate at the threshold while its seeded value was below "
+        "it, after settle): none"]
+    detector = lines.index("detector (detector_node's own alarms, apart from the estimates): "
+                           "designed P_FA 0.01 per sample; 100 tested fault-free samples "
+                           "before the first fault starts")
+    assert lines[detector + 3] == ("  yaw         fault-free alarms    5, first alarm after the "
+                                   "first fault starts: 125.0 s")
+    assert len(lines) == detector + 1 + len(metrics["alarms"]["tests"])
 
 
 @pytest.mark.timeout(30)

@@ -104,6 +104,9 @@ def fast_flight_ros_args(scenario: Path | str, subscribers: int) -> list[str]:
 
 # The graph's nodes other than sim_node run on its /clock (simulation time).
 SIM_TIME_ROS_ARGS = ("-p", "use_sim_time:=true")
+# A node whose output its starter writes to a log file (RosProcess, bringup.sh) writes no
+# log file of its own: rcl's, under ROS_LOG_DIR, would be a second copy of that output.
+NO_LOG_FILE_ROS_ARGS = ("--disable-external-lib-logs",)
 
 
 def wait_until(predicate: Callable[[], object], timeout_s: float, poll_s: float = 0.1) -> bool:

@@ -7,6 +7,7 @@ the file and the key's path. No ROS here.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,23 @@ class FileKind:
     error: type[ValueError]
     max_bytes: int
     shipped_size: str
+
+
+def kind_mismatch(data: Any, keys: Sequence[str], expected: str) -> str | None:
+    """What is wrong, in words, when a parsed file is not of the kind expected (`expected`:
+    what such a file is and what writes it) because it lacks one of the top-level `keys`
+    every such file has, as a file of another kind does (a scenario given for a
+    calibration): such a file's keys and what this one holds instead. None when it has
+    them all (what else may be wrong with it is the reader's to say)."""
+    if isinstance(data, dict) and all(key in data for key in keys):
+        return None
+    if isinstance(data, dict) and data:
+        found = "the keys " + ", ".join(map(str, data))
+    elif isinstance(data, dict) or data is None:
+        found = "nothing"
+    else:
+        found = f"a {type(data).__name__}, not a mapping"
+    return f"not {expected}, whose keys are {', '.join(keys)}; this file holds {found}"
 
 
 def is_number(value: Any) -> bool:

@@ -28,9 +28,10 @@ class ParameterSpec:
     description (its unit in brackets at the end); its default, whose type is the
     parameter's (4.0 a real, 4 an integer, [] a list of strings); for numbers, the closed
     range [low, high] its values (each element of an array) must lie in; for a string, the
-    choices it must be one of; and whether the node applies a change at run time (live) or
-    reads it once, at start (read-only). The package's config/<node>.yaml and the docs'
-    parameter tables are generated from these (tools/parameter_pages.py)."""
+    choices it must be one of, and what the empty string means when it is one of them
+    (empty_choice: "the scenario's"); and whether the node applies a change at run time
+    (live) or reads it once, at start (read-only). The package's config/<node>.yaml and the
+    docs' parameter tables are generated from these (tools/parameter_pages.py)."""
 
     description: str
     default: Any
@@ -38,9 +39,20 @@ class ParameterSpec:
     high: float | None = None
     live: bool = False
     choices: tuple[str, ...] = ()
+    empty_choice: str = ""
 
     def range_text(self) -> str:
         return "" if self.low is None or self.high is None else f"[{self.low:g}, {self.high:g}]"
+
+    def choice_text(self, choice: str) -> str:
+        """A choice as a message lists it: the empty string as '' and what it means."""
+        if choice:
+            return choice
+        return "''" + (f" ({self.empty_choice})" if self.empty_choice else "")
+
+    def choices_text(self) -> str:
+        """The choices as a message lists them: `'' (the scenario's), aerosonde, carbon_z`."""
+        return ", ".join(map(self.choice_text, self.choices))
 
 
 # Every stream node's `wait_for_subscribers` parameter (when_subscribed).
@@ -103,7 +115,7 @@ def checked_value(name: str, value: Any, kind: Parameter.Type, spec: ParameterSp
                                  f"{_expected(kind, spec)}")
     if spec.choices and value not in spec.choices:
         raise ParameterError(f"parameter {name}: {value!r} is not a choice; it must be one of "
-                             f"{', '.join(spec.choices)}")
+                             f"{spec.choices_text()}")
     return value
 
 
@@ -122,7 +134,7 @@ def _descriptor(kind: Parameter.Type, spec: ParameterSpec) -> ParameterDescripto
         elif kind in _NUMBER_ARRAYS:
             descriptor.additional_constraints = f"each value in {spec.range_text()}"
     if spec.choices:
-        descriptor.additional_constraints = f"one of {', '.join(spec.choices)}"
+        descriptor.additional_constraints = f"one of {spec.choices_text()}"
     return descriptor
 
 

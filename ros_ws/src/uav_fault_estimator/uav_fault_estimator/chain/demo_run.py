@@ -1,6 +1,7 @@
 """The main job: fly a scenario through the nodes, record every topic, report.
 
-    scripts/demo.sh [SCENARIO.yaml ...] [--out DIR] [--model-calibration MODEL.yaml]
+    scripts/demo.sh [SCENARIO.yaml ...] [--out DIR] [--duration S]
+        [--model-calibration MODEL.yaml]
 
 Starts recorder_node, mhe_node, residual_node, detector_node and sim_node as processes
 (the executables `ros2 run` starts) on a ROS domain of the run's own, flies the scenario
@@ -13,6 +14,10 @@ runs/<scenario name>/) receives bag/ (rosbag2, MCAP), metrics.json, the figures 
 parameters. --model-calibration (scripts/calibrate_model.py's file): residual_node's models
 are the calibrated aircraft (model_calibration_file), and mhe_node takes the noise
 calibration made on the same flights (noise_calibration_file) where the file names one.
+--duration S flies a shorter flight: each scenario cut at S seconds (a copy of its file with
+that duration, logs/[uavk/]scenario.yaml, is what sim_node flies); faults starting later
+are not reached, which the start and the report say. The last line says whether each
+vehicle's run met the estimator's default targets (reporting/targets.py).
 
 Several scenarios fly several aircraft in the one domain: vehicle k flies the k-th under
 the namespace /uavk with nodes of its own, the first simulator publishes /clock and the
@@ -28,15 +33,16 @@ marks with the file .uav-demo-run. A run into a marked folder replaces the bag/ 
 the earlier one; a folder that exists, is not empty and has no mark is refused, as is an
 --out that is a file or cannot be written.
 
-Exit status: 0 done; 1 a node ended on its own during the run (its name and exit status are
-printed; the recording so far is left readable) or the report failed; 2 a bad argument,
-scenario or output folder (one line, before any process starts); 130 interrupted (Ctrl-C,
-SIGTERM).
+Exit status: 0 done, the targets met; 1 a node ended on its own during the run (its name
+and exit status are printed; the recording so far is left readable) or the report failed; 2
+a bad argument, scenario or output folder (one line, before any process starts); 3 done,
+a target missed (the last line says which); 130 interrupted (Ctrl-C, SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import shutil
 import signal
@@ -52,6 +58,7 @@ from uav_aircraft.vehicles import DEFAULT_VEHICLE
 from uav_common.message_fields import stamp_seconds
 from uav_common.package_data import default_parameters
 from uav_common.ros_processes import (
+    NO_LOG_FILE_ROS_ARGS,
     RosProcess,
     exit_status_text,
     fast_flight_ros_args,
@@ -63,6 +70,7 @@ from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, loa
 
 from uav_fault_estimator.chain import node_graph
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError
+from uav_fault_estimator.reporting import targets
 from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
 
@@ -78,6 +86,8 @@ OUTPUT_SUBSCRIBERS = {"residual_node": 2, "mhe_node": 2, "detector_node": 1}
 RECORDER = "/recorder_node"  # its status on /diagnostics counts what it has recorded
 OUTPUT_MARK = ".uav-demo-run"  # in an output folder the demo made: its bag/ and logs/ are its own
 REPLACED = ("bag", "logs")  # what a run replaces of an earlier one in the same folder
+CUT_SCENARIO = "scenario.yaml"  # in a vehicle's logs: its scenario as --duration cut it
+EXIT_TARGET_MISSED = 3
 
 
 def subscribers_args(executable: str) -> list[str]:
@@ -103,12 +113,14 @@ class StalledError(Exception):
 
 @dataclass(frozen=True)
 class DemoAircraft:
-    """One aircraft of the run: its namespace ("" when it flies alone), scenario and
-    mhe_node parameter file (None: the defaults)."""
+    """One aircraft of the run: its namespace ("" when it flies alone), scenario (as
+    flown: cut short by --duration), mhe_node parameter file (None: the defaults), and what
+    the cut left out of the scenario, in words ("" for none)."""
 
     namespace: str
     scenario: Scenario
     mhe_params: Path | None
+    cut_note: str = ""
 
     def topic(self, name: str) -> str:
         """The absolute name of one of its nodes' topics."""
@@ -135,8 +147,10 @@ class Progress:
 
         self._rclpy = rclpy
         self.context = rclpy.Context()
-        # Ctrl-C stays Python's KeyboardInterrupt, handled by the demo
-        rclpy.init(context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        # Ctrl-C stays Python's KeyboardInterrupt, handled by the demo; no rcl log file in
+        # the run's logs/ (the node logs nothing)
+        rclpy.init(args=["--ros-args", *NO_LOG_FILE_ROS_ARGS], context=self.context,
+                   signal_handler_options=SignalHandlerOptions.NO)
         self.node = rclpy.create_node("_demo", context=self.context,
                                       start_parameter_services=False, enable_rosout=False)
         self.executor = SingleThreadedExecutor(context=self.context)
@@ -384,6 +398,51 @@ def prepare_output(out: Path, *scenario_paths: Path) -> None:
             f"cannot write into the output folder {out} ({reason}); {what_to_do}") from None
 
 
+def check_duration(duration_s: float, scenarios: list[Scenario]) -> None:
+    """ScenarioError (one line) unless --duration's duration_s [s] cuts every scenario
+    short: a positive number of seconds, none longer than a scenario."""
+    if not (math.isfinite(duration_s) and duration_s > 0):
+        raise ScenarioError(f"--duration {duration_s:g}: a flight's duration is a positive "
+                            "number of seconds")
+    for scenario in scenarios:
+        if duration_s > scenario.duration_s:
+            raise ScenarioError(
+                f"--duration {duration_s:g} s is longer than the scenario '{scenario.name}' "
+                f"({scenario.duration_s:g} s): it cuts a scenario short")
+
+
+def cut_scenario(scenario: Scenario, duration_s: float, folder: Path) -> Scenario:
+    """The scenario flown only to duration_s [s]: a copy of its file with that duration, in
+    folder (the vehicle's logs), the file sim_node flies."""
+    data = yaml.safe_load(scenario.path.read_text())
+    data["duration_s"] = duration_s
+    path = folder / CUT_SCENARIO
+    path.write_text(f"# {scenario.path}, cut at {duration_s:g} s by demo.sh --duration\n"
+                    + yaml.safe_dump(data, sort_keys=False))
+    return replace(scenario, duration_s=duration_s, path=path)
+
+
+def cut_note(scenario: Scenario, duration_s: float) -> str:
+    """What cutting the scenario at duration_s [s] leaves out, in words: the faults that
+    start later are not reached."""
+    note = (f"scenario '{scenario.name}' cut at {duration_s:g} s of its "
+            f"{scenario.duration_s:g} s (--duration)")
+    later = [fault for fault in scenario.faults if fault.start_s > duration_s]
+    if later:
+        note += ": not reached, starting later: " + ", ".join(
+            f"{fault.name} at {fault.start_s:g} s" for fault in later)
+    return note
+
+
+def targets_line(verdicts: list[tuple[str, targets.Verdict | None]]) -> str:
+    """Whether each vehicle's run (by namespace; "" alone) met the targets, in one line;
+    None: its report failed."""
+    said = [(f"{namespace} " if namespace else "")
+            + (verdict.text() if verdict else "no report to judge")
+            for namespace, verdict in verdicts]
+    return f"targets ({targets.TARGETS_PAGE}): " + "; ".join(said)
+
+
 def check_one_clock(scenarios: list[Scenario]) -> None:
     """ScenarioError unless the scenarios last as long: the vehicles fly on one clock."""
     durations = sorted({scenario.duration_s for scenario in scenarios})
@@ -431,13 +490,16 @@ def main(runs_dir: Path) -> int:
     """demo.sh's command line; runs_dir: where the default output folders go."""
     parser = argparse.ArgumentParser(
         prog="demo.sh", description=__doc__.splitlines()[0],
-        epilog="Exit status: 0 done, 1 a node or the report failed, 2 bad arguments or "
-        "scenario, 130 interrupted.")
+        epilog="Exit status: 0 done and the targets met, 1 a node or the report failed, 2 "
+        "bad arguments or scenario, 3 done and a target missed, 130 interrupted.")
     parser.add_argument("scenarios", nargs="*", type=Path, metavar="scenario",
                         help="scenario YAML (default: the shipped default scenario); several: "
                         "one aircraft each, under /uav1, /uav2, ...")
     parser.add_argument("--out", type=Path,
                         help="output directory (default: runs/<scenario name>[+<name>...]/)")
+    parser.add_argument("--duration", type=float, metavar="S",
+                        help="fly only the first S seconds: every scenario cut at S (faults "
+                        "starting later are not reached)")
     parser.add_argument("--model-calibration", type=Path, metavar="MODEL.yaml",
                         help="the models' calibration (scripts/calibrate_model.py) for every "
                         "vehicle")
@@ -452,7 +514,10 @@ def main(runs_dir: Path) -> int:
         scenarios = [replace(scenario, path=scenario.path.resolve()) for scenario in
                      map(load_scenario, arguments.scenarios or [default_scenario_path()])]
         overrides = [mhe_overrides(scenario) for scenario in scenarios]
-        check_one_clock(scenarios)
+        if arguments.duration is None:
+            check_one_clock(scenarios)
+        else:  # every one cut to the same length
+            check_duration(arguments.duration, scenarios)
         model_calibration = arguments.model_calibration and arguments.model_calibration.resolve()
         # refused here, before any process
         calibration = (node_graph.model_calibration_files(
@@ -470,8 +535,11 @@ def main(runs_dir: Path) -> int:
         for namespace, scenario, override in zip(namespaces, scenarios, overrides, strict=True):
             logs = out / "logs" / namespace.strip("/")
             logs.mkdir(exist_ok=True)
-            vehicles.append(DemoAircraft(namespace, scenario, write_parameter_file(
-                logs / "mhe_node.params.yaml", override)))
+            cut = arguments.duration is not None
+            vehicles.append(DemoAircraft(
+                namespace, cut_scenario(scenario, arguments.duration, logs) if cut else scenario,
+                write_parameter_file(logs / "mhe_node.params.yaml", override),
+                cut_note(scenario, arguments.duration) if cut else ""))
     except OutputFolderError as error:
         print(f"demo: {error}", file=sys.stderr)  # one line
         return 2
@@ -483,9 +551,11 @@ def main(runs_dir: Path) -> int:
     domain_id, lock = reserve_domain_id()
     os.environ.update(ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
                       ROS_LOG_DIR=str(out / "logs"))
-    for vehicle in vehicles:
+    for vehicle, scenario in zip(vehicles, scenarios, strict=True):
         print(f"demo: {vehicle.namespace + ' flies ' if vehicle.namespace else ''}scenario "
-              f"'{vehicle.scenario.name}' ({vehicle.scenario.path})", flush=True)
+              f"'{scenario.name}' ({scenario.path})", flush=True)
+        if vehicle.cut_note:
+            print(f"demo: {vehicle.cut_note}", flush=True)
     print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
     demo = Demo(vehicles, out, calibration)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
@@ -514,6 +584,7 @@ def main(runs_dir: Path) -> int:
         return status
 
     missing = False
+    verdicts: list[tuple[str, targets.Verdict | None]] = []
     for vehicle in vehicles:
         report_out = out / vehicle.namespace.strip("/")
         try:
@@ -523,6 +594,7 @@ def main(runs_dir: Path) -> int:
             print(f"demo: no report{' of ' + vehicle.namespace if vehicle.namespace else ''}: "
                   f"{error}", file=sys.stderr)
             missing = True
+            verdicts.append((vehicle.namespace, None))
             continue
         except KeyboardInterrupt:
             print("\ndemo: interrupted while writing the report", file=sys.stderr)
@@ -531,6 +603,11 @@ def main(runs_dir: Path) -> int:
         if vehicle.namespace:
             print(f"{vehicle.namespace}:")
         print(table(metrics))
+        if vehicle.cut_note:
+            print(vehicle.cut_note)
+        late = targets.reached_late(vehicle.scenario.duration_s, vehicle.scenario.faults_pct)
+        verdicts.append((vehicle.namespace, targets.judge(
+            metrics["faults"], metrics["false_alarms"], late)))
         print(f"written to {report_out}: " + ("" if vehicle.namespace else "bag/, logs/, ")
               + "metrics.json, " + ", ".join(path.name for path in figures))
         if received[vehicle.namespace] < demo.expected:
@@ -542,8 +619,11 @@ def main(runs_dir: Path) -> int:
     for namespace, (name, status) in demo.failed.items():
         print(f"demo: {namespace} failed: {name} exited with {exit_status_text(status)} "
               "during the run", file=sys.stderr)
-    print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time")
-    return 1 if failed or missing or demo.failed else 0
+    print(f"demo: done in {time.monotonic() - wall_started:.1f} s of wall time; "
+          + targets_line(verdicts))
+    if failed or missing or demo.failed:
+        return 1
+    return EXIT_TARGET_MISSED if any(v and v.missed for _, v in verdicts) else 0
 
 
 def _stop(demo: Demo) -> list[str]:

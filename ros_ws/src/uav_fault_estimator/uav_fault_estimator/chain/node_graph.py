@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from uav_aircraft.vehicles import DEFAULT_VEHICLE
-from uav_common.ros_processes import SIM_TIME_ROS_ARGS
+from uav_common.ros_processes import NO_LOG_FILE_ROS_ARGS, SIM_TIME_ROS_ARGS
 from uav_sim.scenario import load_scenario
 
 from uav_fault_estimator.estimation.model_file import load_model_calibration
@@ -84,8 +84,8 @@ def node_ros_args(executable: str, namespace: str, clock_leader: bool,
     """The ROS arguments that wire one of an aircraft's nodes (or, namespace "", one of the
     whole graph): its namespace, the vehicle it models, the model calibration's files, and
     /clock for every node but the simulator that publishes it (clock_leader: the first
-    aircraft's)."""
-    args = ["-r", f"__ns:={namespace}"] if namespace else []
+    aircraft's); and no rcl log file, as the launchers write the node's output to one."""
+    args = [*NO_LOG_FILE_ROS_ARGS, *(["-r", f"__ns:={namespace}"] if namespace else [])]
     if executable in MODELLING_NODES:
         args += ["-p", f"vehicle:={vehicle}"]
     if calibration is not None and executable == "residual_node":

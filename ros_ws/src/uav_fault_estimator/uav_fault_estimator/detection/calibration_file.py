@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import yaml
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
+from uav_common.strict_yaml import kind_mismatch
 
 from uav_fault_estimator.detection.calibration import (
     SIMULATED_AIRFRAME,
@@ -20,6 +21,13 @@ from uav_fault_estimator.detection.calibration import (
 )
 from uav_fault_estimator.detection.change_detection import Weibull
 from uav_fault_estimator.detection.generators import GENERATORS, checked_generators
+
+# What a detector calibration file is, for the line that refuses a file of another kind
+DETECTOR_CALIBRATION = ("a detector calibration (scripts/calibrate_detector.py's or "
+                        "screen_logs.py calibrate's file, a vehicle's detector_calibration.yaml)")
+# The keys every such file has (calibration_to_dict's)
+CALIBRATION_KEYS = ("airframe", "reference_airspeed_mps", "sample_period_s", "forgetting_factor",
+                    "window", "settle_s", "parameter_deviation_weibull", "channels")
 
 
 def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
@@ -87,8 +95,15 @@ def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibrati
     ValueError with one line naming the file."""
     file = Path(path) if path else shipped_calibration_path()
     try:
-        calibration = calibration_from_dict(yaml.safe_load(file.read_text()))
-    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as error:
+        data = yaml.safe_load(file.read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        raise ValueError(f"calibration file {file}: {type(error).__name__}: {error}") from None
+    mismatch = kind_mismatch(data, CALIBRATION_KEYS, DETECTOR_CALIBRATION)
+    if mismatch:
+        raise ValueError(f"calibration file {file}: {mismatch}")
+    try:
+        calibration = calibration_from_dict(data)
+    except (KeyError, TypeError, ValueError) as error:
         raise ValueError(f"calibration file {file}: {type(error).__name__}: {error}") from None
     if calibration.airframe != airframe:
         raise ValueError(

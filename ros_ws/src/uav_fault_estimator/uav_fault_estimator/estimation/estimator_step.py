@@ -70,6 +70,17 @@ class StepResult:
     fit: FitVerdict
 
 
+def warm_up_text(config: EstimatorConfig) -> str:
+    """What the first estimates are, in one line (mhe_node says it at start, so that a
+    flight in real time does not look stuck): the prior until the residuals are valid, and
+    meaningful from SETTLE_S of simulation time on."""
+    prior = ", ".join(f"{value:g}" for value in config.prior_pct)
+    return (f"the estimates are the prior ({prior} %) until the residuals are valid "
+            f"(residual_node's recovery_s after the start), and meaningful from {SETTLE_S:g} s "
+            f"of simulation time on (settled; the window holds the last {config.horizon} "
+            "residuals); a simulator flying in real time takes as many wall seconds")
+
+
 def fault_reported(estimates_pct: np.ndarray) -> bool:
     """Whether any of the estimates [%] is at or above the detection threshold."""
     return bool(np.size(estimates_pct)) and float(np.max(estimates_pct)) >= (

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from uav_aircraft.flown_aircraft import FlownAircraft, read_aircraft
 from uav_aircraft.vehicles import load_vehicle
-from uav_common.strict_yaml import FileKind, load_yaml
+from uav_common.strict_yaml import FileKind, kind_mismatch, load_yaml
 
 from uav_fault_estimator.estimation.model_calibration import (
     ModelCalibration,
@@ -40,6 +40,10 @@ class ModelCalibrationError(ValueError):
 
 MODEL_CALIBRATION_FILE = FileKind("model calibration", ModelCalibrationError, 64 * 1024,
                                   "calibrate_model.py writes about 3 kB")
+# The keys every model calibration has, and what such a file is (for the line that refuses
+# a file of another kind)
+MODEL_CALIBRATION_KEYS = ("vehicle", "model_file", "model_sha256", "aircraft")
+MODEL_CALIBRATION = "a model calibration (scripts/calibrate_model.py's file)"
 
 
 MEASURED_AIRCRAFT_FILE = FileKind("measured aircraft", ModelCalibrationError, 64 * 1024,
@@ -97,7 +101,10 @@ def load_model_calibration(path: str | Path, vehicle: str) -> CalibratedModel:
     its XML than the one shipped."""
     path = Path(path)
     reader = load_yaml(MODEL_CALIBRATION_FILE, path)
-    reader.check_keys({"vehicle", "model_file", "model_sha256", "aircraft"},
+    mismatch = kind_mismatch(reader.data, MODEL_CALIBRATION_KEYS, MODEL_CALIBRATION)
+    if mismatch:
+        reader.fail(mismatch)
+    reader.check_keys(set(MODEL_CALIBRATION_KEYS),
                       {"noise_calibration_file", "parameters", "worst_correlations", "fit"})
     if reader.text("vehicle") != vehicle:
         reader.fail(f"made for the vehicle {reader.data['vehicle']!r}, not {vehicle!r}")

@@ -21,10 +21,14 @@ from pathlib import Path
 import numpy as np
 import yaml
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
+from uav_common.strict_yaml import kind_mismatch
 
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
 
 SUITES = {WIND_AIR_DATA: "air_data", WIND_FILTERED: "filtered_wind"}
+# What a noise calibration file is, for the line that refuses a file of another kind
+NOISE_CALIBRATION = ("a noise calibration (scripts/calibrate_estimator.py's file, a vehicle's "
+                     "residual_noise.yaml)")
 # suite name -> whether the aircraft has air data on board (scenario sensors.air_data)
 AIR_DATA_ON_BOARD = {suite: source == WIND_AIR_DATA for source, suite in SUITES.items()}
 
@@ -122,12 +126,18 @@ def load_noise_calibration(path: str | Path = "",
     path = Path(path) if path else shipped_noise_path(vehicle)
     try:
         data = yaml.safe_load(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        raise ValueError(f"noise calibration {path}: cannot be read ({error})") from None
+    mismatch = kind_mismatch(data, ("vehicle", *SUITES.values()), NOISE_CALIBRATION)
+    if mismatch:
+        raise ValueError(f"noise calibration {path}: {mismatch}")
+    try:
         made_for = data["vehicle"]
         variances = {suite: np.array(data[suite]["variances"], dtype=float)
                      for suite in SUITES.values()}
         correlations = {suite: np.array(data[suite]["one_step_correlations"], dtype=float)
                         for suite in SUITES.values()}
-    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as error:
+    except (KeyError, TypeError, ValueError) as error:
         raise ValueError(f"noise calibration {path}: cannot be read ({error})") from None
     if made_for != vehicle:
         raise ValueError(f"noise calibration {path}: made for the vehicle {made_for!r}, not "

@@ -36,6 +36,7 @@ from uav_fault_estimator.estimation.estimator_step import (
     RejectedSampleError,
     ResidualInput,
     StepResult,
+    warm_up_text,
 )
 from uav_fault_estimator.estimation.mhe import SUSPECT_SIGMAS, EstimateResult
 from uav_fault_estimator.estimation.model_fit import DOES_NOT_FIT, FitVerdict
@@ -158,6 +159,7 @@ class MheNode(Node):
         self.state_file = Path(self.parameters["state_file"]) if self.parameters[
             "state_file"] else None
         self.saved = self.saved_estimate()
+        self.get_logger().info(warm_up_text(self.step.config))
 
     def retune(self, changes: dict[str, Any]) -> None:
         """Apply changed live parameters from the next residual on (ParameterError: none)."""

@@ -64,7 +64,8 @@ PARAMETERS = {
     "scenario": ParameterSpec("scenario YAML file; empty: the shipped scenarios/default.yaml",
                               ""),
     "vehicle": ParameterSpec("the aircraft flown; empty: the scenario's `vehicle`, which a "
-                             "name given here must equal", "", choices=("", *vehicle_names())),
+                             "name given here must equal", "", choices=("", *vehicle_names()),
+                             empty_choice="the scenario's"),
     # at least 1 Hz; at most JSBSim's own 480 Hz (and a divisor of it: Simulation checks)
     "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock, a divisor "
                                     "of 480 [Hz]", 20.0,
