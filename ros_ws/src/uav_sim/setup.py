@@ -8,16 +8,6 @@ PACKAGE = "uav_sim"
 HERE = Path(__file__).parent
 
 
-def share_tree(folder: str) -> list[tuple[str, list[str]]]:
-    """data_files entries installing every file below `folder` under share/<pkg>/<folder>."""
-    entries: dict[str, list[str]] = {}
-    for path in sorted((HERE / folder).rglob("*")):
-        if path.is_file():
-            relative = path.relative_to(HERE)
-            entries.setdefault(f"share/{PACKAGE}/{relative.parent}", []).append(str(relative))
-    return sorted(entries.items())
-
-
 setup(
     name=PACKAGE,
     version="0.1.0",
@@ -25,8 +15,10 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        *share_tree("scenarios"),
-        *share_tree("config"),
+        # the shipped scenarios and sim_node's parameter YAML (flat folders)
+        *[(f"share/{PACKAGE}/{folder}",
+           [str(path.relative_to(HERE)) for path in sorted((HERE / folder).glob("*.yaml"))])
+          for folder in ("scenarios", "config")],
     ],
     install_requires=["setuptools"],
     zip_safe=True,
