@@ -26,7 +26,7 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO_ROOT / "tests"))  # the writer of simulated logs: helpers/
 
 from helpers import simulated_logs  # noqa: E402
-from uav_common.package_data import config_path  # noqa: E402
+from uav_aircraft.vehicles import load_vehicle  # noqa: E402
 from uav_sim.paths import scenarios_dir  # noqa: E402
 from uav_sim.scenario import load_scenario  # noqa: E402
 
@@ -59,7 +59,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=REPO_ROOT / "examples" / "flights")
     arguments = parser.parse_args()
-    airframe = config_path("uav_fault_estimator", "airframes/aerosonde_sim.yaml")
+    airframe = load_vehicle("aerosonde").airframe_files["aerosonde_sim"]
     truth = simulated_logs.simulate_truth(example_scenario(), SEED, airframe)
     folder = arguments.out / FLIGHT
     with tempfile.TemporaryDirectory() as scratch:
