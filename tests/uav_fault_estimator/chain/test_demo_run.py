@@ -16,7 +16,6 @@ import pytest
 import yaml
 from helpers.process_table import kill_all, nodes_logging_under
 from helpers.repo import SCRIPTS
-from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.package_data import default_parameters
 from uav_common.ros_processes import RosProcess, wait_until
@@ -32,7 +31,7 @@ from uav_fault_estimator.estimation.model_file import shipped_model
 from uav_fault_estimator.recording.project_bag import project_typestore, read_topics
 from uav_fault_estimator.reporting import report
 from uav_sim.paths import scenarios_dir
-from uav_sim.scenario import load_scenario
+from uav_sim.scenario import load_scenario, vehicle_scenario_path
 
 pytestmark = pytest.mark.integration
 
@@ -164,7 +163,7 @@ def test_two_aircraft_in_one_domain_each_estimate_as_their_own_offline_chain(
     duration_s = 60.0
     methods = ("mpc", "vector_field")
     vehicles = ("aerosonde", "carbon_z")
-    scenarios = [short_scenario(duration_s, load_vehicle(vehicle).default_scenario,
+    scenarios = [short_scenario(duration_s, vehicle_scenario_path(vehicle, "default"),
                                 faults=[fault], guidance={"method": method})
                  for fault, method, vehicle in zip(TWO_FAULTS, methods, vehicles, strict=True)]
     demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
