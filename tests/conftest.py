@@ -13,6 +13,7 @@ import cloudpickle
 import helpers
 import pytest
 import yaml
+from helpers.flight_cache import FlightCache
 from helpers.flights import fly
 from helpers.started_processes import started_processes
 from uav_common.ros.graph_probe import RosGraph
@@ -85,9 +86,18 @@ def default_scenario() -> Scenario:
 
 
 @pytest.fixture(scope="session")
-def default_flight(default_scenario) -> list[Sample]:
-    """The default scenario's samples, flown once per test process."""
-    return fly(default_scenario)
+def flight_cache(tmp_path_factory: pytest.TempPathFactory) -> FlightCache:
+    """Flights flown once per run (helpers/flight_cache.py), in the run's own temporary
+    folder: the one every xdist worker's folder is in, or this process's without xdist."""
+    base = tmp_path_factory.getbasetemp()
+    return FlightCache((base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base)
+                       / "flights")
+
+
+@pytest.fixture(scope="session")
+def default_flight(default_scenario, flight_cache) -> list[Sample]:
+    """The default scenario's samples, flown once per run."""
+    return flight_cache.flown(fly, default_scenario)
 
 
 @pytest.fixture(scope="session")

@@ -46,16 +46,20 @@ CALIBRATION_AIRSPEEDS_MPS = (21.0, 25.0, 29.0)
 UNSEEN_AIRSPEEDS_MPS = (23.0, 27.0)
 PER_AIRSPEED = 4  # calibration flights at each airspeed
 UNSEEN_PER_AIRSPEED = 3  # test flights at each unseen airspeed
+# The aileron loss flown to 20 s after its onset (150 s), not 300 s: its only use is each
+# calibration's first combined alarm after the onset (measured 3.4-5.2 s, held to 10 s), and
+# the flight and the detector are causal: the first 170 s are the 300 s flight's bit for bit.
+FAULT_FLIGHT_S = 170.0
 
 
 @pytest.fixture(scope="module")
 def flown(campaign):
     """Calibration flights (PER_AIRSPEED at each calibration airspeed), fault-free flights
-    at each unseen airspeed, the aileron loss at 23 m/s; its onset [s]."""
+    at each unseen airspeed, the aileron loss at 23 m/s (FAULT_FLIGHT_S); its onset [s]."""
     aileron = load_scenario(scenarios_dir() / "aileron_loss.yaml")
     scenarios = [*fault_free_at(CALIBRATION_AIRSPEEDS_MPS, PER_AIRSPEED, 501),
                  *fault_free_at(UNSEEN_AIRSPEEDS_MPS, UNSEEN_PER_AIRSPEED, 601),
-                 at_airspeed(aileron, 23.0)]
+                 dataclasses.replace(at_airspeed(aileron, 23.0), duration_s=FAULT_FLIGHT_S)]
     flights = [f.detector_flight for f in fly_on_grid_each(campaign, scenarios,
                                                                  DEFAULT_SAMPLE_PERIOD_S)]
     count = len(CALIBRATION_AIRSPEEDS_MPS) * PER_AIRSPEED
