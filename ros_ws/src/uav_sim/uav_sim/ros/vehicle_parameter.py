@@ -1,7 +1,8 @@
-"""The `vehicle` parameter every node that models an aircraft declares (sim_node,
-residual_node, mhe_node, detector_node): one declaration, the shipped vehicles its choices."""
+"""The `vehicle` parameter every node that models an aircraft declares (residual_node,
+mhe_node, detector_node, through their cores' settings): one declaration, the shipped
+vehicles its choices. No rclpy here: the settings (uav_common.settings) take it."""
 
-from uav_common.ros.parameters import ParameterSpec
+from uav_common.settings import ParameterSpec
 
 from uav_sim.vehicles import DEFAULT_VEHICLE, vehicle_names
 
