@@ -53,6 +53,7 @@ from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.reference_solution import ClarabelSolver, solve_reference
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.offline import PACKAGE
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
@@ -83,8 +84,7 @@ def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
         duration_s=max(scenario.duration_s, samples * UPDATE_PERIOD_S + 30.0),
     )
     simulation = Simulation(scenario)
-    sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
-                                "wind_error_step_mps": 1.0})
+    sampler = residual_sampler(ResidualSettings(wind_error_step_mps=1.0))
     rows = []
     sample = simulation.sample()
     while len(rows) < samples:

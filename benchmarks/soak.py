@@ -37,6 +37,7 @@ from uav_common.package_data import default_parameters
 from uav_common.ros.messages import header
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import RosProcess, reserve_domain_id, ros2_run_argv, stop_all
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 from uav_sim.flight_replay import FlightSample, Replayer, simulated_flight
@@ -222,7 +223,7 @@ def main() -> int:
         stop_all(list(processes.values()))
         graph.close()
         lock.close()
-    settle_s = (default_parameters("uav_fault_estimator", "residual_node.yaml")["recovery_s"]
+    settle_s = (ResidualSettings().recovery_s
                 + default_parameters("uav_fault_estimator", "mhe_node.yaml")["horizon"]
                 * RESIDUAL_PERIOD_S)
     clean_at = {round(stamp_seconds(m.header.stamp), 6): np.array(m.values_pct) for m in clean}

@@ -16,7 +16,6 @@ import yaml
 from helpers.flights import calm
 from helpers.recordings import write_recording
 from helpers.repo import SCRIPTS
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.estimation.calibration_check import (
     MAX_PRIOR_DEVIATIONS,
     check_calibration,
@@ -24,6 +23,7 @@ from uav_fault_estimator.estimation.calibration_check import (
 )
 from uav_fault_estimator.estimation.model_calibration import calibrate
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.offline import sensor_flight
 from uav_sim.flown_aircraft import FlownAircraft
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
@@ -42,9 +42,8 @@ def flight():
 
 
 def calibrated(flight, names):
-    return calibrate([flight], names,
-                     default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                     load_noise_calibration(), log=lambda line: None)
+    return calibrate([flight], names, ResidualSettings(), load_noise_calibration(),
+                     log=lambda line: None)
 
 
 @pytest.mark.timeout(300)
