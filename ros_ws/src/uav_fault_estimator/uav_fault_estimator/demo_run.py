@@ -49,7 +49,6 @@ from typing import Any
 
 import yaml
 from uav_common.message_fields import stamp_seconds
-from uav_common.package_data import default_parameters
 from uav_common.ros_processes import (
     RosProcess,
     exit_status_text,
@@ -63,6 +62,7 @@ from uav_sim.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator import node_graph
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError
+from uav_fault_estimator.nodes.mhe_node import PARAMETERS as MHE_PARAMETERS
 from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
 
@@ -399,7 +399,7 @@ def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
     (ROS parameters do not convert)."""
     if not scenario.estimator:
         return {}
-    defaults = default_parameters("uav_fault_estimator", "mhe_node.yaml")
+    defaults = {name: spec.default for name, spec in MHE_PARAMETERS.items()}
     overrides = {}
     for name, value in scenario.estimator.items():
         if name not in defaults:
