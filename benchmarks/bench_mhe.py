@@ -5,7 +5,7 @@
 
 1. A realistic sequence: the default scenario flown by the core simulator (turbulence as
    given), its residuals and sensitivities from the residual core every 0.5 s, and
-   mhe_node's default configuration (config/mhe_node.yaml: N = 50, four monotonic faults
+   mhe_node's default configuration (EstimatorSettings: N = 50, four monotonic faults
    bounded to [0, 100] %), first with the four faults alone (p = 4), then with the three
    wind-error columns as well (`estimate_wind_errors`, off by default). The project's
    estimator runs it (the whole `update` call, as the node makes it); the same QPs then go,
@@ -43,17 +43,18 @@ from typing import Any
 import numpy as np
 from proxsuite import proxqp
 from uav_common.channels import PAPER_FAULT_NAMES
-from uav_common.package_data import default_parameters
-from uav_fault_estimator.chain.offline import PACKAGE
-from uav_fault_estimator.estimation.estimator_config import (
-    EstimatorConfig,
-    config_from_parameters,
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
+from uav_fault_estimator.estimation.estimator_settings import (
+    EstimatorSettings,
+    config_from_settings,
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
+from uav_fault_estimator.estimation.noise_model import load_noise_calibration
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.reference_solution import ClarabelSolver, solve_reference
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
@@ -68,8 +69,8 @@ REPEATS = 7  # passes over the same sequence per timing (see fastest)
 
 def node_config(wind_errors: bool = False) -> EstimatorConfig:
     """mhe_node's defaults; with the three wind-error nuisance columns or faults only."""
-    parameters = default_parameters(PACKAGE, "mhe_node.yaml")
-    return config_from_parameters({**parameters, "estimate_wind_errors": wind_errors}, 6)
+    settings = EstimatorSettings(estimate_wind_errors=wind_errors)
+    return config_from_settings(settings, load_noise_calibration(vehicle=settings.vehicle))
 
 
 def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
@@ -83,8 +84,7 @@ def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
         duration_s=max(scenario.duration_s, samples * UPDATE_PERIOD_S + 30.0),
     )
     simulation = Simulation(scenario)
-    sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
-                                "wind_error_step_mps": 1.0})
+    sampler = residual_sampler(ResidualSettings(wind_error_step_mps=1.0))
     rows = []
     sample = simulation.sample()
     while len(rows) < samples:

@@ -17,9 +17,8 @@ import argparse
 import time
 
 import numpy as np
-from uav_common.package_data import default_parameters
-from uav_fault_estimator.chain.offline import PACKAGE
 from uav_fault_estimator.estimation.prediction import residual_generator
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
 
@@ -33,8 +32,8 @@ def main() -> None:
     samples = [simulation.sample()]
     while simulation.time_s < arguments.seconds - 0.5 * simulation.period_s:
         samples.append(simulation.step())
-    parameters = default_parameters(PACKAGE, "residual_node.yaml")
-    generator = residual_generator(parameters)
+    settings = ResidualSettings()
+    generator = residual_generator(settings)
     costs_s = np.empty(len(samples))
     for index, sample in enumerate(samples):
         started = time.perf_counter()
@@ -42,7 +41,7 @@ def main() -> None:
                          sample.wind_filtered_ned_mps)
         costs_s[index] = time.perf_counter() - started
     per_published_s = costs_s[1:].reshape(
-        -1, round(parameters["update_period_s"] / simulation.period_s))
+        -1, round(settings.update_period_s / simulation.period_s))
     per_published_s = per_published_s.sum(axis=1)
     micro = 1e6
     print(f"{len(samples)} samples at 20 Hz, S columns {len(generator.column_names)}, "

@@ -33,10 +33,11 @@ from pathlib import Path
 import numpy as np
 from uav_common.channels import CONTROL_CHANNELS, PAPER_FAULT_NAMES, STATE_CHANNELS
 from uav_common.message_fields import stamp_seconds
-from uav_common.package_data import default_parameters
 from uav_common.ros.messages import header
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import RosProcess, reserve_domain_id, ros2_run_argv, stop_all
+from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 from uav_sim.ros.flight_replay import FlightSample, Replayer, simulated_flight
@@ -222,9 +223,8 @@ def main() -> int:
         stop_all(list(processes.values()))
         graph.close()
         lock.close()
-    settle_s = (default_parameters("uav_fault_estimator", "residual_node.yaml")["recovery_s"]
-                + default_parameters("uav_fault_estimator", "mhe_node.yaml")["horizon"]
-                * RESIDUAL_PERIOD_S)
+    settle_s = (ResidualSettings().recovery_s
+                + EstimatorSettings().horizon * RESIDUAL_PERIOD_S)
     clean_at = {round(stamp_seconds(m.header.stamp), 6): np.array(m.values_pct) for m in clean}
     dirty_at = {round(stamp_seconds(m.header.stamp), 6): np.array(m.values_pct) for m in dirty}
     grid = {round(k * RESIDUAL_PERIOD_S, 6) for k in range(1, expected + 1)}

@@ -13,9 +13,10 @@ Without --calibrate-on: leave one flight out (each flight screened with a calibr
 the fault-free parts of all the others) or, --leave-out day, one day out (each day's
 flights with a calibration from the other days' flights); flight_logs.benchmark. With it:
 one calibration from the fault-free parts of FOLDER's flights, every flight of ALFA_FOLDER
-screened with it. Calibrations use detector_node's window, ALFA_FORGETTING_FACTOR and
-ALFA_SETTLE_S unless given (screen_logs.py takes such a calibration; detector_node, made for
-0.995, refuses it), and the named generators (default ALFA_GENERATORS: the roll, pitch and
+screened with it. Calibrations use the default window of a calibration
+(detection.calibration), ALFA_FORGETTING_FACTOR and ALFA_SETTLE_S unless given (a
+calibration carries them: screen_logs.py and detector_node run it with them), and the named
+generators (default ALFA_GENERATORS: the roll, pitch and
 climb tracking generators, which read the autopilot's intent and the aircraft's response,
 not the outputs ALFA's injection pins, and the lateral specific force; the propulsion
 channel reads the throttle output an engine failure cuts, so it would count the injection).
@@ -44,7 +45,6 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from uav_aircraft.vehicles import load_vehicle
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     CampaignOptions,
     add_campaign_arguments,
@@ -54,10 +54,12 @@ from uav_fault_estimator.campaigns.campaign import (
 from uav_fault_estimator.campaigns.cluster_security import ClusterAddressError
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_WINDOW,
     Calibration,
 )
 from uav_fault_estimator.detection.calibration_fit import calibrate_scheduled
 from uav_fault_estimator.detection.detector import DetectorFlight, DetectorSample
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.detection.generators import generator_names
 from uav_fault_estimator.flight_logs import keipour2019_rls as peer
 from uav_fault_estimator.flight_logs.benchmark import (
@@ -269,10 +271,10 @@ def parser() -> argparse.ArgumentParser:
     top.add_argument("--airframe", type=Path, default=DEFAULT_AIRFRAME)
     top.add_argument("--generators", type=generator_names, default=ALFA_GENERATORS)
     top.add_argument("--schedule", choices=("auto", "none"), default="none")
-    top.add_argument("--false-alarm-probability", type=float, default=0.01)
+    top.add_argument("--false-alarm-probability", type=float,
+                     default=DetectorSettings().false_alarm_probability)
     top.add_argument("--forgetting-factor", type=float, default=ALFA_FORGETTING_FACTOR)
-    top.add_argument("--window", type=int, default=default_parameters(
-        "uav_fault_estimator", "detector_node.yaml")["window"])
+    top.add_argument("--window", type=int, default=DEFAULT_WINDOW)
     top.add_argument("--settle-s", type=float, default=ALFA_SETTLE_S)
     add_campaign_arguments(top)
     return top

@@ -9,9 +9,10 @@ sensors, air data) with other seeds and background winds of 20-25 % of its airsp
 directions 360/N degrees apart, samples it every sample_period_s, and fits: the RLS's initial
 parameters and covariance, the parameters' fault-free mean and spread, and the Weibull
 distributions of the GLRT statistic (per channel) and of the largest parameter deviation
-(self_tuning.calibrate). Writes the YAML that detector_node reads (default: the vehicle
-folder's detector_calibration.yaml in this source tree); the window and forgetting factor are
-detector_node's defaults (config/detector_node.yaml), for which alone the calibration holds.
+(calibration_fit.calibrate). Writes the YAML that detector_node reads (default: the vehicle
+folder's detector_calibration.yaml in this source tree), with the sample period, forgetting
+factor, window and settling time it was made with (detection.calibration's defaults), for
+which alone it holds: detector_node runs it with them.
 Held-out flights for the false-alarm test use seeds from 201 (tests/detector). --bags
 calibrates from recordings of fault-free flights instead (recorder_node's or demo.sh's bag/
 folders: their /state and /controls).
@@ -26,7 +27,6 @@ from pathlib import Path
 
 from uav_aircraft.paths import calibration_output_path
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, DETECTOR_CALIBRATION_FILE, vehicle_names
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
@@ -42,7 +42,6 @@ from uav_fault_estimator.chain.offline import (
 )
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
-    DEFAULT_SETTLE_S,
     simulated_airframe,
 )
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
@@ -88,15 +87,12 @@ def main() -> int:
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     out = arguments.out or calibration_output_path(arguments.vehicle, DETECTOR_CALIBRATION_FILE)
-    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
     started = time.monotonic()
     try:
         flights, header = (recorded(arguments.bags) if arguments.bags
                            else simulated(arguments.flights, arguments.vehicle,
                                           campaign_options(arguments)))
-        calibration = calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, node["forgetting_factor"],
-                                node["window"], DEFAULT_SETTLE_S,
-                                airframe=simulated_airframe(arguments.vehicle),
+        calibration = calibrate(flights, airframe=simulated_airframe(arguments.vehicle),
                                 generators=arguments.generators)
     except (ValueError, FileNotFoundError) as error:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)

@@ -41,7 +41,6 @@ from pathlib import Path
 
 from uav_aircraft.flown_aircraft import NOMINAL
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
@@ -54,6 +53,7 @@ from uav_fault_estimator.estimation.model_calibration import CalibrationError, c
 from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
 from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,
@@ -92,12 +92,10 @@ def main() -> int:
     minutes = sum(f.times_s[-1] - f.times_s[0] for f in flights) / 60.0
     print(f"{len(flights)} flights, {minutes:.1f} min; parameters {', '.join(names)}")
     noise = load_noise_calibration(vehicle=vehicle)
-    residual_parameters = {**default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                           "vehicle": vehicle}
     try:
         with Campaign(campaign_options(arguments)) as campaign:
             calibration = calibrate(
-                flights, names, residual_parameters, noise,
+                flights, names, ResidualSettings(vehicle=vehicle), noise,
                 map_flights=functools.partial(campaign.results, name="recorded flights"),
                 measured=measured)
     except CalibrationError as error:

@@ -24,10 +24,10 @@ summary.json, and the figure marks the onset.
 
 calibrate: calibration_fit.calibrate over the logs with the airframe's name and the named
 generators (detection.generators; default the paper's roll, pitch, yaw), on the grid of
-DEFAULT_SAMPLE_PERIOD_S, settling DEFAULT_SETTLE_S, with detector_node's window and
-forgetting factor (config/detector_node.yaml), so that detector_node takes the file too;
---forgetting-factor, --window and --settle-s make one for screening with other settings
-(detector_node refuses it, screen takes it: a calibration carries its settings).
+DEFAULT_SAMPLE_PERIOD_S, settling DEFAULT_SETTLE_S, with DEFAULT_WINDOW and
+DEFAULT_FORGETTING_FACTOR (detection.calibration, as the shipped calibrations are made);
+--forgetting-factor, --window and --settle-s make one with other settings (a calibration
+carries its settings: detector_node and screen run it with them).
 --schedule auto (default): the parameters' means scheduled on airspeed when the logs'
 airspeeds span enough (calibration.MIN_SCHEDULE_SPAN_MPS), else a line saying why and no
 schedule; airspeed: a schedule or refuse; none: no schedule.
@@ -56,7 +56,6 @@ from pathlib import Path
 from typing import NamedTuple
 
 from uav_aircraft.airframe import Airframe, load_airframe
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     CampaignOptions,
     add_campaign_arguments,
@@ -66,8 +65,10 @@ from uav_fault_estimator.campaigns.campaign import (
 from uav_fault_estimator.campaigns.cluster_security import ClusterAddressError
 from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.detection.calibration import (
+    DEFAULT_FORGETTING_FACTOR,
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
+    DEFAULT_WINDOW,
 )
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict, read_calibration
 from uav_fault_estimator.detection.calibration_fit import (
@@ -76,6 +77,7 @@ from uav_fault_estimator.detection.calibration_fit import (
     calibrate_scheduled,
 )
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
 from uav_fault_estimator.flight_logs.benchmark import LabelledFlight, fault_free_part
 from uav_fault_estimator.flight_logs.evaluation import (
@@ -107,12 +109,6 @@ PROGRAM = "screen_logs.py"
 
 class BadInputError(Exception):
     """Input the user must mend: exit status 2 with the message as one line."""
-
-
-def detector_settings() -> dict:
-    """detector_node's parameters (config/detector_node.yaml): its window and forgetting
-    factor are a calibration's defaults here, so that detector_node takes it."""
-    return default_parameters("uav_fault_estimator", "detector_node.yaml")
 
 
 def airframe_of(path: Path) -> Airframe:
@@ -281,12 +277,11 @@ def parser() -> argparse.ArgumentParser:
     calibrate_command.add_argument("--truth", type=Path, default=None,
                                    help="truth table: a failure log's part from its onset "
                                         "on is left out")
-    node = detector_settings()
     calibrate_command.add_argument("--forgetting-factor", type=float,
-                                   default=node["forgetting_factor"],
-                                   help="lambda_f of the RLS (default detector_node's)")
-    calibrate_command.add_argument("--window", type=int, default=node["window"],
-                                   help="M, the GLRT window [samples] (default detector_node's)")
+                                   default=DEFAULT_FORGETTING_FACTOR,
+                                   help="lambda_f of the RLS (default %(default)g)")
+    calibrate_command.add_argument("--window", type=int, default=DEFAULT_WINDOW,
+                                   help="M, the GLRT window [samples] (default %(default)d)")
     calibrate_command.add_argument("--settle-s", type=float, default=DEFAULT_SETTLE_S,
                                    help="no test this long after a start [s]")
     add_campaign_arguments(calibrate_command)
@@ -297,8 +292,9 @@ def parser() -> argparse.ArgumentParser:
     screen_command.add_argument("--airframe", type=Path, required=True)
     screen_command.add_argument("--out", type=Path, required=True,
                                 help="the folder for the tables, figures and summaries")
-    screen_command.add_argument("--false-alarm-probability", type=float, default=0.01,
-                                help="designed per sample and test (default 0.01)")
+    screen_command.add_argument("--false-alarm-probability", type=float,
+                                default=DetectorSettings().false_alarm_probability,
+                                help="designed per sample and test (default %(default)g)")
     screen_command.add_argument("--truth", type=Path, default=None,
                                 help="truth table (log,failure,onset_stamp_s); without it "
                                      "ALFA folders' own failure_status files")

@@ -24,7 +24,6 @@ import sys
 import time
 from pathlib import Path
 
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
@@ -34,6 +33,7 @@ from uav_fault_estimator.campaigns.campaign import (
 from uav_fault_estimator.chain.offline import fly_on_grid_each
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
@@ -62,8 +62,7 @@ def main() -> int:
     parser.add_argument("--json", type=Path, help="write the figures here")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
-    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
-    p_fa = node["false_alarm_probability"]
+    p_fa = DetectorSettings().false_alarm_probability
     started = time.monotonic()
     aileron = load_scenario(scenarios_dir() / "aileron_loss.yaml")
     fault_start_s = min(fault.start_s for fault in aileron.faults)
@@ -79,7 +78,7 @@ def main() -> int:
     faults = len(FAULT_AIRSPEEDS_MPS)
     test_flights, fault_flights = rest[:-faults], rest[-faults:]
     results = {}
-    made = compared_calibrations(calibration_flights, arguments.per_airspeed, node)
+    made = compared_calibrations(calibration_flights, arguments.per_airspeed)
     for name, calibration in made.items():
         per_airspeed = {f"{airspeed:g}": row for airspeed, row in zip(
             TEST_AIRSPEEDS_MPS, rates_per_group(calibration, test_flights,

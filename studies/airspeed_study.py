@@ -12,8 +12,6 @@ from collections.abc import Sequence
 import numpy as np
 from uav_fault_estimator.chain.offline import fault_free_flights
 from uav_fault_estimator.detection.calibration import (
-    DEFAULT_SAMPLE_PERIOD_S,
-    DEFAULT_SETTLE_S,
     Calibration,
 )
 from uav_fault_estimator.detection.calibration_fit import calibrate
@@ -63,23 +61,21 @@ def mean_rates(calibration: Calibration, flights: Sequence[DetectorFlight],
     return {test: float(np.mean([m[test] for m in measured])) for test in TESTS}
 
 
-def calibrated(flights: Sequence[DetectorFlight], detector_parameters: dict,
-               scheduled: bool) -> Calibration:
-    """self_tuning.calibrate on the flights with detector_node's forgetting factor and window
-    (detector_parameters: its parameters), with or without the airspeed schedule."""
-    return calibrate(flights, DEFAULT_SAMPLE_PERIOD_S, detector_parameters["forgetting_factor"],
-                     detector_parameters["window"], DEFAULT_SETTLE_S, scheduled=scheduled)
+def calibrated(flights: Sequence[DetectorFlight], scheduled: bool) -> Calibration:
+    """calibration_fit.calibrate on the flights with the default settings of a calibration
+    (the shipped ones'), with or without the airspeed schedule."""
+    return calibrate(flights, scheduled=scheduled)
 
 
-def compared_calibrations(flights: Sequence[DetectorFlight], per_airspeed: int,
-                          detector_parameters: dict) -> dict[str, Calibration]:
+def compared_calibrations(flights: Sequence[DetectorFlight],
+                          per_airspeed: int) -> dict[str, Calibration]:
     """The calibrations the study compares (CALIBRATIONS), from per_airspeed flights at each
     of three calibration airspeeds, in order: one_airspeed (the middle airspeed's flights
     alone), unscheduled and scheduled (all of them)."""
     middle = flights[per_airspeed:2 * per_airspeed]
-    return {"one_airspeed": calibrated(middle, detector_parameters, False),
-            "unscheduled": calibrated(flights, detector_parameters, False),
-            "scheduled": calibrated(flights, detector_parameters, True)}
+    return {"one_airspeed": calibrated(middle, False),
+            "unscheduled": calibrated(flights, False),
+            "scheduled": calibrated(flights, True)}
 
 
 def rates_per_group(calibration: Calibration, flights: Sequence[DetectorFlight],

@@ -42,7 +42,6 @@ from statistics import NormalDist
 import numpy as np
 from uav_aircraft.vehicles import vehicle_names
 from uav_common.channels import ACTUATOR_FAULT_NAMES
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
@@ -53,13 +52,12 @@ from uav_fault_estimator.chain.offline import GridFlight, fault_free_flights, fl
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
-    simulated_airframe,
-)
-from uav_fault_estimator.detection.calibration_file import (
-    load_calibration,
-    shipped_calibration_path,
 )
 from uav_fault_estimator.detection.detector import RegressionFeed, flight_samples, run_detector
+from uav_fault_estimator.detection.detector_settings import (
+    DetectorSettings,
+    detector_calibration,
+)
 from uav_sim.scenario import ACTUATOR_FAULT_PCT, Scenario, SeededFault
 
 FIRST_SEED = 501  # other seeds than the calibrations' (101-112, 301-304) and the studies'
@@ -190,12 +188,11 @@ def main() -> int:
         grid = fly_on_grid_each(campaign, [scenario for *_, scenario in table] + twins,
                                 DEFAULT_SAMPLE_PERIOD_S)
     grid, twin_grid = grid[:len(table)], iter(grid[len(table):])
-    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
-    calibration = load_calibration(
-        str(arguments.calibration or shipped_calibration_path(arguments.vehicle)),
-        node["window"], node["forgetting_factor"], simulated_airframe(arguments.vehicle))
+    settings = DetectorSettings(vehicle=arguments.vehicle,
+                                calibration_file=str(arguments.calibration or ""))
+    calibration = detector_calibration(settings)
     rows = [(kind, onset_s, *first_alarms(flight, calibration,
-                                          node["false_alarm_probability"], onset_s),
+                                          settings.false_alarm_probability, onset_s),
              math.nan if kind == FAULT_FREE else signal_to_noise(
                  flight, next(twin_grid), calibration, onset_s))
             for (kind, onset_s, _), flight in zip(table, grid, strict=True)]

@@ -30,6 +30,7 @@ at the logged throttle and the air-relative speed the wind estimate gives
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -43,11 +44,11 @@ from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
 from uav_aircraft.propeller import Propeller
 from uav_aircraft.vehicles import load_vehicle, vehicle_names
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.estimation.model_calibration import SensorFlight, calibrate
 from uav_fault_estimator.estimation.model_parameters import AIR_DATA_BIASES, DEFAULT_PARAMETERS
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
 from uav_fault_estimator.estimation.prediction import residual_sampler
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import LINEAR, detector_samples, resample
@@ -110,11 +111,11 @@ def steady_engine_speed(state: np.ndarray, controls: np.ndarray, wind_ned_mps: n
     return rpm
 
 
-def residual_rows(flight: SensorFlight, residual_parameters: dict,
+def residual_rows(flight: SensorFlight, residual: ResidualSettings,
                   model: FlownAircraft) -> np.ndarray:
-    """The valid residual rows (K, 6) residual_node's generator (its parameters, no fault
+    """The valid residual rows (K, 6) residual_node's generator (its settings, no fault
     columns) gives on the flight with the model's copies."""
-    sampler = residual_sampler({**residual_parameters, "fault_names": []}, model)
+    sampler = residual_sampler(dataclasses.replace(residual, fault_names=()), model)
     rows = []
     for k, time_s in enumerate(flight.times_s):
         try:
@@ -152,19 +153,18 @@ def main() -> int:
                                          .variances[FILTERED])]
     print("channels: " + ", ".join(RESIDUAL_CHANNELS) + " (m/s^2, rad/s^2)")
     print("assumed noise RMS: " + " ".join(f"{v:.3f}" for v in assumed))
-    residual_parameters = {**default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                           "vehicle": vehicle}
-    shipped = {f.name: rms(residual_rows(f, residual_parameters, NOMINAL)) for f in flights}
+    residual = ResidualSettings(vehicle=vehicle)
+    shipped = {f.name: rms(residual_rows(f, residual, NOMINAL)) for f in flights}
     days = sorted({day_of(f.name) for f in flights})
     held_out = {}
     for day in days:
         fitted_on = [f for f in flights if day_of(f.name) != day]
-        calibration = calibrate(fitted_on, PARAMETERS, residual_parameters,
+        calibration = calibrate(fitted_on, PARAMETERS, residual,
                                 filtered_noise(vehicle), log=lambda line: None)
         values = dict(zip(calibration.names, calibration.values.round(2).tolist(), strict=True))
         for flight in (f for f in flights if day_of(f.name) == day):
             held_out[flight.name] = {"day_left_out": day, "calibrated_rms": rms(
-                residual_rows(flight, residual_parameters, calibration.aircraft)),
+                residual_rows(flight, residual, calibration.aircraft)),
                 "parameters": values}
     for flight in flights:
         print(f"{flight.name}: shipped "

@@ -34,7 +34,6 @@ from pathlib import Path
 import numpy as np
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_aircraft.vehicles import load_vehicle
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
@@ -52,6 +51,7 @@ from uav_fault_estimator.estimation.model_calibration import (
 )
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
 from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_noise_calibration
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting import targets
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import Scenario, SetpointChange, default_scenario_path, load_scenario
@@ -172,9 +172,8 @@ def calibrate_scenarios(scenarios: list[Scenario], parameters: tuple[str, ...],
     calibrate_model.py does it; the calibration, the flights and the noise model used."""
     flights = [sensor_flight(scenario) for scenario in scenarios]
     noise = load_noise_calibration()
-    calibration = calibrate(flights, parameters,
-                            default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                            noise, log=lambda line: None, measured=measured)
+    calibration = calibrate(flights, parameters, ResidualSettings(), noise,
+                            log=lambda line: None, measured=measured)
     return calibration, flights, noise
 
 

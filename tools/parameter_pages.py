@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """The nodes' parameter files and the docs' parameter tables, generated from each node's
-PARAMETERS (uav_common.ros.parameters.ParameterSpec: the one place a parameter, its
-description, default, range and whether it is live, is declared).
+PARAMETERS (uav_common.settings.ParameterSpec: the one place a parameter, its description,
+default, range and whether it is live, is declared; a core's in its settings' fields).
 
     python tools/parameter_pages.py          # write every config/<node>.yaml and table
     python tools/parameter_pages.py --check  # exit 1, one line per file, when one is stale
 
-Writes each package's config/<node>.yaml (what `--params-file` users copy and the offline
-chain reads), the table of each node's page between the markers
-`<!-- parameters of NODE ... -->` and `<!-- end of parameters -->`, and docs/design.md's
+Writes each package's config/<node>.yaml (what `--params-file` users copy), the table of
+each node's page between the markers `<!-- parameters of NODE ... -->` and
+`<!-- end of parameters -->`, and docs/design.md's
 table of every node's parameters between `<!-- parameters of every node ... -->` and the
 same end marker. Run from the repository root with scripts/env.sh sourced.
 """
@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from uav_common.ros.parameters import ParameterSpec
+from uav_common.settings import ParameterSpec
 from uav_fault_estimator.chain.node_graph import PACKAGES
 
 REPO_ROOT = Path(__file__).resolve().parent.parent

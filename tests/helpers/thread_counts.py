@@ -13,11 +13,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from uav_common.package_data import default_parameters
-from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.chain.offline import fault_free_residuals, fly_and_estimate, fly_on_grid
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.detector_settings import DetectorSettings, detector_calibration
 from uav_fault_estimator.estimation.solve_status import SolveStatus
-from uav_fault_estimator.offline import fault_free_residuals, fly_and_estimate, fly_on_grid
 from uav_sim.scenario import default_scenario_path, load_scenario
 
 # How each library reports its thread count, by a part of its file name: OpenBLAS as numpy
@@ -68,11 +67,10 @@ def flight_figures(duration_s: float) -> dict:
                                    duration_s=duration_s)
     residuals = fault_free_residuals(scenario)
     estimates, _ = fly_and_estimate(scenario)
-    node = default_parameters("uav_fault_estimator", "detector_node.yaml")
-    calibration = dataclasses.replace(
-        load_calibration("", node["window"], node["forgetting_factor"]), settle_s=0.0)
+    settings = DetectorSettings()
+    calibration = dataclasses.replace(detector_calibration(settings), settle_s=0.0)
     samples = run_detector(calibration, fly_on_grid(scenario, calibration.sample_period_s),
-                           node["false_alarm_probability"])
+                           settings.false_alarm_probability)
     statistics = np.array([s.statistic for s in samples])
     return {
         "digests": {

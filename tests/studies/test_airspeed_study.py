@@ -19,14 +19,14 @@ import dataclasses
 import numpy as np
 import pytest
 import yaml
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.chain.offline import fly_on_grid_each
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
 from uav_fault_estimator.detection.calibration_file import (
     calibration_to_dict,
-    load_calibration,
+    read_calibration,
 )
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
@@ -40,8 +40,7 @@ from studies.airspeed_study import (
     rates_per_group,
 )
 
-NODE = default_parameters("uav_fault_estimator", "detector_node.yaml")
-P_FA = NODE["false_alarm_probability"]
+P_FA = DetectorSettings().false_alarm_probability
 CALIBRATION_AIRSPEEDS_MPS = (21.0, 25.0, 29.0)
 UNSEEN_AIRSPEEDS_MPS = (23.0, 27.0)
 PER_AIRSPEED = 4  # calibration flights at each airspeed
@@ -70,7 +69,7 @@ def flown(campaign):
 @pytest.mark.timeout(240)
 def test_unseen_airspeeds_stay_near_the_design_and_faults_come_sooner(flown):
     calibration_flights, unseen, fault_flight, onset_s = flown
-    made = compared_calibrations(calibration_flights, PER_AIRSPEED, NODE)
+    made = compared_calibrations(calibration_flights, PER_AIRSPEED)
     measured = {name: rates_per_group(calibration, unseen, UNSEEN_PER_AIRSPEED, P_FA)
                 for name, calibration in made.items()}
     for name, per_airspeed in measured.items():
@@ -94,23 +93,23 @@ def test_a_schedule_from_one_airspeed_is_refused(flown):
     calibration_flights, *_ = flown
     with pytest.raises(ValueError, match=r"^the calibration flights span 2\d\.\d-2\d\.\d m/s "
                                          r"of airspeed: an airspeed schedule needs at least 2 "):
-        calibrated(calibration_flights[PER_AIRSPEED:2 * PER_AIRSPEED], NODE, True)
+        calibrated(calibration_flights[PER_AIRSPEED:2 * PER_AIRSPEED], True)
 
 
 @pytest.mark.slow
 @pytest.mark.timeout(240)
 def test_a_scheduled_calibration_round_trips_and_names_its_airframe(flown, tmp_path):
-    calibration = calibrated(flown[0], NODE, True)
+    calibration = calibrated(flown[0], True)
     assert calibration.airframe == "aerosonde_sim" and calibration.scheduled
     assert 24.0 < calibration.reference_airspeed_mps < 26.0
     path = tmp_path / "calibration.yaml"
     path.write_text(yaml.safe_dump(calibration_to_dict(calibration)))
-    again = load_calibration(str(path), NODE["window"], NODE["forgetting_factor"])
+    again = read_calibration(str(path))
     assert calibration_to_dict(again) == calibration_to_dict(calibration)
     other = dataclasses.replace(calibration, airframe="carbon_z")
     path.write_text(yaml.safe_dump(calibration_to_dict(other)))
     with pytest.raises(ValueError) as refused:
-        load_calibration(str(path), NODE["window"], NODE["forgetting_factor"])
+        read_calibration(str(path))
     assert str(refused.value) == (
         f"calibration file {path} is for the airframe 'carbon_z', not 'aerosonde_sim': "
         "calibrate from fault-free flights of 'aerosonde_sim' (scripts/screen_logs.py)")

@@ -24,8 +24,8 @@ def test_the_config_files_and_tables_are_up_to_date():
 @pytest.mark.timeout(60)
 @pytest.mark.parametrize("node", parameter_pages.NODES, ids=lambda node: node.name)
 def test_each_default_reads_back_with_its_type(node):
-    """What the generated YAML gives (the offline chain and --params-file users read it) is
-    each declared default, of the declared type (4.0 a real, not 4)."""
+    """What the installed YAML gives (--params-file users copy it) is each declared default,
+    of the declared type (4.0 a real, not 4)."""
     installed = default_parameters(node.package, f"{node.name}.yaml")
     declared = {name: spec.default for name, spec in node.specs.items()}
     assert installed == declared

@@ -17,7 +17,6 @@ import yaml
 from helpers.process_table import kill_all, nodes_logging_under
 from helpers.repo import SCRIPTS
 from uav_common.channels import PAPER_FAULT_NAMES
-from uav_common.package_data import default_parameters
 from uav_common.ros_processes import RosProcess, wait_until
 from uav_fault_estimator.chain.demo_run import (
     OUTPUT_MARK,
@@ -28,6 +27,7 @@ from uav_fault_estimator.chain.demo_run import (
 )
 from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.estimation.model_file import shipped_model
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.recording.project_bag import project_typestore, read_topics
 from uav_fault_estimator.reporting import report
 from uav_sim.paths import scenarios_dir
@@ -462,8 +462,7 @@ def test_one_aircraft_failing_leaves_the_other_to_finish(
     the 110 s after the kill's moment take seconds of wall time, where 30 s of a 40 s flight
     were once flown between the progress line and the kill."""
     duration_s = 120.0
-    estimates = round(duration_s / default_parameters(
-        "uav_fault_estimator", "residual_node.yaml")["update_period_s"])  # one per residual
+    estimates = round(duration_s / ResidualSettings().update_period_s)  # one per residual
     scenarios = [short_scenario(duration_s, faults=[fault]) for fault in TWO_FAULTS]
     demo = start_process([str(DEMO), *map(str, scenarios), "--out", str(run_dir)], "demo")
     kill_at(10.0, demo, run_dir, "mhe_node", "uav1")

@@ -20,25 +20,24 @@ import pytest
 import yaml
 from helpers.nested import assert_same_numbers
 from helpers.repo import REPO_ROOT
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.chain.offline import fault_free_flights, fly_on_grid, fly_on_grid_each
 from uav_fault_estimator.detection.calibration import Calibration
-from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.calibration_file import read_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 
-NODE_DEFAULTS = default_parameters("uav_fault_estimator", "detector_node.yaml")
-P_FA = NODE_DEFAULTS["false_alarm_probability"]
+P_FA = DetectorSettings().false_alarm_probability
 TESTS = (*SURFACE_GENERATORS, "parameters", "combined")
 ONSET_S = 150.0  # aileron_loss.yaml
 
 
 @pytest.fixture(scope="module")
 def calibration() -> Calibration:
-    return load_calibration("", NODE_DEFAULTS["window"], NODE_DEFAULTS["forgetting_factor"])
+    return read_calibration("")
 
 
 def alarms(samples) -> np.ndarray:
@@ -106,7 +105,7 @@ def test_the_propulsion_channel_sees_a_thrust_loss_in_the_throttle_it_needs():
     flight = fly_on_grid(scenario, 0.2).detector_flight
     before_loss = flight.times_s < 95.0
     calibration = calibrate([DetectorFlight(*(column[before_loss] for column in flight[:4]))],
-                            0.2, 0.995, 25, 30.0, generators=("propulsion",))
+                            generators=("propulsion",))
     samples = run_detector(calibration, flight, P_FA)
     times_s = np.array([s.time_s for s in samples])
     bias = np.array([s.theta["propulsion"][2] for s in samples])

@@ -11,11 +11,11 @@ import dataclasses
 import numpy as np
 import pytest
 from uav_common.channels import AIR_DATA_CHANNELS
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.chain.offline import fly_and_estimate
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_FILTERED
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_fault_estimator.reporting.targets import DETECTED_WITHIN_S as DELAY_LIMIT_S
@@ -81,7 +81,7 @@ def test_a_fault_starting_during_the_loss_is_found_when_the_hold_ends():
     for name, fault in faults.items():
         print(f"{name}: {fault}")
     assert false_alarms == []
-    tau_a_s = default_parameters("uav_fault_estimator", "residual_node.yaml")["tau_a_s"]
+    tau_a_s = ResidualSettings().tau_a_s
     hold_ends_s = 120.0 + SuiteNoise.HOLD_AFTER_TAU_A * tau_a_s
     delay_s = faults["left_wing_drag_increase"]["detection_delay_s"]
     assert hold_ends_s - 0.5 <= 110.0 + delay_s <= hold_ends_s + 3.0

@@ -17,7 +17,6 @@ from helpers.flights import calm
 from helpers.recordings import write_recording
 from helpers.repo import SCRIPTS
 from uav_aircraft.flown_aircraft import FlownAircraft
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.chain.offline import sensor_flight
 from uav_fault_estimator.estimation.calibration_check import (
     MAX_PRIOR_DEVIATIONS,
@@ -26,6 +25,7 @@ from uav_fault_estimator.estimation.calibration_check import (
 )
 from uav_fault_estimator.estimation.model_calibration import calibrate
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
 
 FLOWN = FlownAircraft(cg_offset_m=(0.0, 0.02, 0.0))  # 2 cm right of the centre line
@@ -42,9 +42,8 @@ def flight():
 
 
 def calibrated(flight, names):
-    return calibrate([flight], names,
-                     default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                     load_noise_calibration(), log=lambda line: None)
+    return calibrate([flight], names, ResidualSettings(), load_noise_calibration(),
+                     log=lambda line: None)
 
 
 @pytest.mark.timeout(300)

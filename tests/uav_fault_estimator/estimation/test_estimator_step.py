@@ -9,22 +9,19 @@ import dataclasses
 import numpy as np
 import pytest
 from uav_common.channels import PAPER_FAULT_NAMES
-from uav_common.package_data import default_parameters
+from uav_fault_estimator.estimation import estimator_step
+from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.estimator_step import (
     EstimatorStep,
     RejectedSampleError,
     ResidualInput,
     warm_up_text,
 )
+from uav_fault_estimator.estimation.noise_model import load_noise_calibration
 from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA
 
 PERIOD_S, SAMPLES, TAU_A_S = 0.5, 80, 4.0
 FAULTS = list(PAPER_FAULT_NAMES)
-
-
-def mhe_parameters() -> dict:
-    """mhe_node's shipped parameters."""
-    return default_parameters("uav_fault_estimator", "mhe_node.yaml")
 
 
 def samples(seed: int = 0) -> list[ResidualInput]:
@@ -55,7 +52,7 @@ def run(step: EstimatorStep, inputs: list[ResidualInput]) -> np.ndarray:
 ])
 def test_a_sample_it_cannot_use_is_refused_and_changes_nothing(bad):
     inputs = samples()
-    clean, tried = EstimatorStep(mhe_parameters()), EstimatorStep(mhe_parameters())
+    clean, tried = EstimatorStep(EstimatorSettings()), EstimatorStep(EstimatorSettings())
     expected = run(clean, inputs)
     before = run(tried, inputs[:40])
     with pytest.raises(RejectedSampleError):
@@ -76,10 +73,10 @@ def test_columns_are_picked_by_name_and_only_the_faults_are_published():
         sample, column_names=[FAULTS[j] for j in order] + ["propulsion_loss"],
         sensitivity=np.column_stack([np.reshape(sample.sensitivity, (6, -1))[:, order],
                                      np.ones(6)]).ravel()) for sample in inputs]
-    expected = run(EstimatorStep(mhe_parameters()), inputs)
-    assert np.array_equal(run(EstimatorStep(mhe_parameters()), extra), expected)
+    expected = run(EstimatorStep(EstimatorSettings()), inputs)
+    assert np.array_equal(run(EstimatorStep(EstimatorSettings()), extra), expected)
     wind_errors = ["wind_north_error", "wind_east_error", "wind_down_error"]
-    with_nuisance = EstimatorStep({**mhe_parameters(), "estimate_wind_errors": True})
+    with_nuisance = EstimatorStep(EstimatorSettings(estimate_wind_errors=True))
     result = with_nuisance.update(dataclasses.replace(
         inputs[0], column_names=FAULTS + wind_errors,
         sensitivity=np.column_stack([np.reshape(inputs[0].sensitivity, (6, -1)),
@@ -91,8 +88,7 @@ def test_columns_are_picked_by_name_and_only_the_faults_are_published():
 
 @pytest.mark.timeout(10)
 def test_the_warm_up_says_the_configured_prior_window_and_settle_time():
-    step = EstimatorStep({**mhe_parameters(), "prior_pct": [1.5, 0.0, 0.0, 0.0],
-                          "horizon": 80})
+    step = EstimatorStep(EstimatorSettings(prior_pct=(1.5, 0.0, 0.0, 0.0), horizon=80))
     text = warm_up_text(step.config)
     assert "the prior (1.5, 0, 0, 0 %) until the residuals are valid" in text
     assert "meaningful from 20 s of simulation time on" in text
@@ -100,3 +96,24 @@ def test_the_warm_up_says_the_configured_prior_window_and_settle_time():
     # what it says of the waiting estimates holds: the prior, until a valid residual comes
     first = step.update(dataclasses.replace(samples()[0], valid=np.zeros(6, dtype=bool)))
     np.testing.assert_array_equal(first.published_pct, [1.5, 0.0, 0.0, 0.0])
+
+
+@pytest.mark.timeout(60)
+def test_the_noise_calibration_is_read_once_and_a_retune_keeps_it(monkeypatch):
+    """The step reads the noise file its settings name once, at setup; a retune (a live
+    setting changed) takes the calibration read then and is configured as a step set up
+    with the new settings."""
+    reads = []
+
+    def counted(*arguments):
+        reads.append(arguments)
+        return load_noise_calibration(*arguments)
+
+    monkeypatch.setattr(estimator_step, "load_noise_calibration", counted)
+    retuned = EstimatorStep(EstimatorSettings())
+    run(retuned, samples()[:40])
+    retuned.retune(dataclasses.replace(retuned.settings, noise_variance_factor=8.0))
+    assert reads == [("", "aerosonde")]
+    fresh = EstimatorStep(EstimatorSettings(noise_variance_factor=8.0))
+    assert retuned.config == fresh.config
+    assert retuned.noise.variance_factor == fresh.noise.variance_factor == 8.0

@@ -17,7 +17,6 @@ from helpers.repo import SCRIPTS
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import STATE_CHANNELS
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.chain.offline import sensor_flight
 from uav_fault_estimator.estimation.model_calibration import calibrate
 from uav_fault_estimator.estimation.model_file import (
@@ -33,6 +32,7 @@ from uav_fault_estimator.estimation.model_parameters import (
     values_of,
 )
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,
@@ -60,9 +60,8 @@ def flight():
 
 @pytest.fixture(scope="module")
 def calibration(flight):
-    return calibrate([flight], tuple(TRUTH),
-                     default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                     load_noise_calibration(), log=lambda line: None, measured=MEASURED)
+    return calibrate([flight], tuple(TRUTH), ResidualSettings(), load_noise_calibration(),
+                     log=lambda line: None, measured=MEASURED)
 
 
 def test_a_parameter_change_and_its_value_are_one_another():
@@ -112,9 +111,8 @@ def test_the_calibration_finds_how_the_flown_aircraft_differs(calibration):
 def test_what_was_measured_on_the_ground_is_kept_and_is_the_prior(calibration):
     assert calibration.aircraft.cg_offset_m == MEASURED.cg_offset_m
     assert np.array_equal(calibration.prior_mean, np.zeros(3))  # nothing fitted was measured
-    moved = calibrate([], ("cg_x_cm", "CDmin"),
-                      default_parameters("uav_fault_estimator", "residual_node.yaml"),
-                      load_noise_calibration(), log=lambda line: None, measured=MEASURED)
+    moved = calibrate([], ("cg_x_cm", "CDmin"), ResidualSettings(), load_noise_calibration(),
+                      log=lambda line: None, measured=MEASURED)
     # no flight: the prior alone, about what was measured
     assert moved.prior_mean == pytest.approx([-1.5, 0.0])
     assert moved.values == pytest.approx([-1.5, 0.0])

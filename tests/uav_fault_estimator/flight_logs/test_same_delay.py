@@ -9,17 +9,16 @@ import dataclasses
 import pytest
 from helpers import simulated_logs
 from uav_aircraft.airframe import load_airframe
-from uav_common.package_data import default_parameters
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
-from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.calibration_file import read_calibration
 from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import detector_samples
 from uav_fault_estimator.flight_logs.screening import first_combined_alarm_s
 from uav_sim.paths import scenarios_dir
 from uav_sim.scenario import load_scenario
 
-NODE = default_parameters("uav_fault_estimator", "detector_node.yaml")
 ONSET_S = 60.0
 SEED = 17
 
@@ -32,9 +31,9 @@ def test_the_logs_give_the_direct_runs_detection_delay(tmp_path):
     truth = simulated_logs.simulate_truth(scenario, SEED)
     simulated_logs.write_ulog(tmp_path / "flight.ulg", truth)
     simulated_logs.write_mavros_bag(tmp_path / "flight.bag", truth, SEED)
-    calibration = load_calibration("", NODE["window"], NODE["forgetting_factor"])
+    calibration = read_calibration("")
     airframe = load_airframe(simulated_logs.FIXTURE_AIRFRAME)
-    p_fa = NODE["false_alarm_probability"]
+    p_fa = DetectorSettings().false_alarm_probability
     delays = {"direct": first_combined_alarm_s(
         run_detector(calibration, truth.grid, p_fa), ONSET_S)}
     for name in ("flight.ulg", "flight.bag"):

@@ -1,6 +1,7 @@
 """detector_node as a process beside sim_node: an alarm message on every 0.2 s sample
-with the calibration's thresholds, the same alarms the core makes offline, and a
-calibration that does not fit the node's parameters refused with one line."""
+with the calibration's thresholds, the same alarms the core makes offline with the window
+and forgetting factor the calibration carries, and a calibration of another airframe
+refused with one line."""
 
 from __future__ import annotations
 
@@ -33,10 +34,11 @@ DURATION_S = 60.0  # the RLS settles after 30 s: half of the flight is tested
 def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, start_process,
                                                         tmp_path):
     """With a calibration of four generators (the paper's three and propulsion), made from
-    the flight itself: the node's channels are the calibration's, its numbers the core's."""
+    the flight itself with a window and forgetting factor of its own (not the defaults):
+    the node's channels are the calibration's, its numbers the core's."""
     scenario = short_scenario(DURATION_S)
     flight = fly_on_grid(load_scenario(scenario), 0.2)[:3]
-    calibration = calibrate([flight], 0.2, 0.995, 25, 30.0, generators=GENERATORS)
+    calibration = calibrate([flight], forgetting_factor=0.99, window=40, generators=GENERATORS)
     calibration_file = tmp_path / "calibration.yaml"
     calibration_file.write_text(yaml.safe_dump(calibration_to_dict(calibration), sort_keys=False))
     alarms = graph.subscribe({"/faults/alarm": FaultAlarm}, STREAM_QOS)["/faults/alarm"]
@@ -65,11 +67,12 @@ def test_alarms_on_every_sample_as_the_core_makes_them(short_scenario, graph, st
 
 
 @pytest.mark.timeout(60)
-def test_a_calibration_for_another_window_is_refused_with_one_line():
+def test_a_calibration_of_another_airframe_is_refused_with_one_line():
     result = subprocess.run(
-        ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=["-p", "window:=40"]),
+        ros2_run_argv("uav_fault_estimator", "detector_node",
+                      ros_args=["-p", "airframe:=carbon_z_alfa"]),
         capture_output=True, text=True, timeout=50)
     assert result.returncode == 2, result  # bad input
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr
-    assert "was made for window 25" in lines[0] and "calibrate_detector.py" in lines[0]
+    assert "is for the airframe 'aerosonde_sim', not 'carbon_z_alfa'" in lines[0], lines

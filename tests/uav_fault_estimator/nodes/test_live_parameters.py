@@ -14,7 +14,7 @@ from scipy.optimize import linprog
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
-from uav_fault_estimator.detection.calibration_file import load_calibration
+from uav_fault_estimator.detection.calibration_file import read_calibration
 from uav_fault_estimator.detection.detector import SelfTuningDetector
 from uav_fault_msgs.msg import FaultAlarm
 
@@ -56,7 +56,7 @@ def test_a_new_false_alarm_probability_gives_the_next_alarms_its_thresholds(
         short_scenario(2.0), subscribers=1)), "sim_node")
     assert sim.wait(timeout_s=90) == 0, sim.output()
     graph.spin(30.0, until=lambda: len(alarms) >= 10)
-    designed = SelfTuningDetector(load_calibration("", 25, 0.995), 1e-5)
+    designed = SelfTuningDetector(read_calibration(""), 1e-5)
     assert len(alarms) == 10
     assert {message.false_alarm_probability for message in alarms} == {1e-5}
     np.testing.assert_allclose([message.threshold for message in alarms],

@@ -21,7 +21,7 @@ from uav_aircraft.airframe import load_airframe
 from uav_common.message_fields import air_data_array, setpoints_array, stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
-from uav_fault_estimator.detection.calibration_file import calibration_to_dict, load_calibration
+from uav_fault_estimator.detection.calibration_file import calibration_to_dict, read_calibration
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.flight_logs.readers import read_log
@@ -134,7 +134,7 @@ def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
     assert replay.wait(timeout_s=40) == 0, replay.output()
 
     inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
-    offline = run_detector(load_calibration("", 25, 0.995), inputs.flight, 0.01)
+    offline = run_detector(read_calibration(""), inputs.flight, 0.01)
     graph.spin(20.0, until=lambda: len(alarms) >= len(offline)
                and len(air_data) >= inputs.times_s.size)
     assert_alarms_are_the_cores(alarms, offline)

@@ -22,6 +22,10 @@ from uav_common.ros.parameters import (
     declare_parameters,
 )
 from uav_common.ros_processes import ros2_run_argv
+from uav_common.settings import parameter_specs, settings_from
+from uav_fault_estimator.detection.detector_settings import DetectorSettings
+from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.nodes import (
     detector_node,
     foxglove_node,
@@ -64,6 +68,20 @@ def test_every_number_has_a_range_that_holds_its_default(name):
                 defaults[parameter])
         else:
             assert spec.low is None and spec.high is None, parameter
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize(("specs", "settings_type"), [
+    (residual_node.PARAMETERS, ResidualSettings), (mhe_node.PARAMETERS, EstimatorSettings),
+    (detector_node.PARAMETERS, DetectorSettings)], ids=["residual", "mhe", "detector"])
+def test_a_nodes_first_parameters_are_its_cores_settings(specs, settings_type):
+    """Declared once: the node's specs of its core's settings are the fields' own, first
+    and in order, and the node's defaults are the settings' defaults."""
+    fields = parameter_specs(settings_type)
+    assert list(specs)[:len(fields)] == list(fields)
+    assert all(specs[name] is spec for name, spec in fields.items())
+    defaults = {name: spec.default for name, spec in specs.items()}
+    assert settings_from(settings_type, defaults) == settings_type()
 
 
 @pytest.mark.timeout(10)
@@ -325,7 +343,7 @@ def test_a_live_parameter_goes_to_the_node_checked_and_a_refusal_keeps_the_value
     try:
         values = declare_parameters(node, detector_node.PARAMETERS, apply_changes)
         assert not node.describe_parameter("false_alarm_probability").read_only
-        assert node.describe_parameter("window").read_only
+        assert node.describe_parameter("calibration_file").read_only
         (ok,) = node.set_parameters([Parameter("false_alarm_probability", value=0.001)])
         assert ok.successful and applied == [{"false_alarm_probability": 0.001}]
         assert values["false_alarm_probability"] == 0.001

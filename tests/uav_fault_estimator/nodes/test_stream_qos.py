@@ -9,8 +9,8 @@ import subprocess
 
 import pytest
 from rclpy.qos import ReliabilityPolicy, qos_profile_sensor_data
-from uav_common.package_data import default_parameters
 from uav_common.ros_processes import ros2_run_argv
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_msgs.msg import FaultAlarm, FaultEstimate, Residuals
 
 pytestmark = pytest.mark.integration
@@ -49,8 +49,7 @@ def test_a_graph_on_sensor_data_estimates_and_the_default_stays_reliable(
                ("/qos/state", "/qos/residuals", "/qos/faults/estimate", "/qos/faults/alarm")}
     graph.spin(30.0, until=lambda: not sim.running())
     assert sim.wait(timeout_s=30) == 0, sim.output()
-    updates = duration_s / default_parameters("uav_fault_estimator",
-                                              "residual_node.yaml")["update_period_s"]
+    updates = duration_s / ResidualSettings().update_period_s
     # the last ones may still be on their way (best effort: some may never come)
     graph.spin(5.0, until=lambda: len(received["/qos/residuals"]) >= updates
                and len(received["/qos/faults/estimate"]) >= updates)

@@ -1,5 +1,5 @@
 """Where a package's data lives: the installed share directory, or the source tree; and
-the nodes' parameter defaults (no rclpy here)."""
+what a node's installed parameter file holds (no rclpy here)."""
 
 from pathlib import Path
 from typing import Any

@@ -1,12 +1,11 @@
-"""Node parameters declared once each, with a descriptor (type, range or choices, live or
-read-only) and the default from the package's config YAML; overrides checked before
-anything is declared; live changes checked and handed to the node."""
+"""Node parameters declared once each (a ParameterSpec, uav_common.settings), with a
+descriptor (type, range or choices, live or read-only) and the spec's default; overrides
+checked before anything is declared; live changes checked and handed to the node."""
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from rcl_interfaces.msg import (
@@ -20,40 +19,7 @@ from rclpy.parameter import Parameter
 
 from uav_common.ros.parameter_files import wildcard_only_names
 from uav_common.ros.qos import STREAM_QOS_PROFILES
-
-
-@dataclass(frozen=True)
-class ParameterSpec:
-    """What a node says about one of its parameters, the one place it is declared: its
-    description (its unit in brackets at the end); its default, whose type is the
-    parameter's (4.0 a real, 4 an integer, [] a list of strings); for numbers, the closed
-    range [low, high] its values (each element of an array) must lie in; for a string, the
-    choices it must be one of, and what the empty string means when it is one of them
-    (empty_choice: "the scenario's"); and whether the node applies a change at run time
-    (live) or reads it once, at start (read-only). The package's config/<node>.yaml and the
-    docs' parameter tables are generated from these (tools/parameter_pages.py)."""
-
-    description: str
-    default: Any
-    low: float | None = None
-    high: float | None = None
-    live: bool = False
-    choices: tuple[str, ...] = ()
-    empty_choice: str = ""
-
-    def range_text(self) -> str:
-        return "" if self.low is None or self.high is None else f"[{self.low:g}, {self.high:g}]"
-
-    def choice_text(self, choice: str) -> str:
-        """A choice as a message lists it: the empty string as '' and what it means."""
-        if choice:
-            return choice
-        return "''" + (f" ({self.empty_choice})" if self.empty_choice else "")
-
-    def choices_text(self) -> str:
-        """The choices as a message lists them: `'' (the scenario's), aerosonde, carbon_z`."""
-        return ", ".join(map(self.choice_text, self.choices))
-
+from uav_common.settings import ParameterSpec
 
 # Every stream node's `wait_for_subscribers` parameter (when_subscribed).
 WAIT_FOR_SUBSCRIBERS_PARAMETER = ParameterSpec(

@@ -56,7 +56,6 @@ from typing import Any
 import yaml
 from uav_aircraft.vehicles import DEFAULT_VEHICLE
 from uav_common.message_fields import stamp_seconds
-from uav_common.package_data import default_parameters
 from uav_common.ros_processes import (
     NO_LOG_FILE_ROS_ARGS,
     RosProcess,
@@ -70,6 +69,7 @@ from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, loa
 
 from uav_fault_estimator.chain import node_graph
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError
+from uav_fault_estimator.nodes.mhe_node import PARAMETERS as MHE_PARAMETERS
 from uav_fault_estimator.reporting import targets
 from uav_fault_estimator.reporting.recorded_run import write_report
 from uav_fault_estimator.reporting.report import residual_update_period_s, table
@@ -458,7 +458,7 @@ def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
     (ROS parameters do not convert)."""
     if not scenario.estimator:
         return {}
-    defaults = default_parameters("uav_fault_estimator", "mhe_node.yaml")
+    defaults = {name: spec.default for name, spec in MHE_PARAMETERS.items()}
     overrides = {}
     for name, value in scenario.estimator.items():
         if name not in defaults:

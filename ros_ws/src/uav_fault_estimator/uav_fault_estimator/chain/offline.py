@@ -1,60 +1,60 @@
 """The main job's chain without ROS: the core simulator, the residual generator and the
-moving-horizon estimator on one scenario, with the nodes' parameters (their config YAML
-unless given; the scenario's vehicle), every 0.5 s of simulation time as the nodes do. For
-tests, tuning and benchmarks; metrics.py turns the result into metrics.json's figures."""
+moving-horizon estimator on one scenario, with the nodes' settings (their defaults unless
+given; the scenario's vehicle), every 0.5 s of simulation time as the nodes do. For tests,
+tuning and benchmarks; metrics.py turns the result into metrics.json's figures."""
 
 from __future__ import annotations
 
 import dataclasses
 import functools
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, NamedTuple
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
 from uav_aircraft.vehicles import DEFAULT_VEHICLE
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
-from uav_common.package_data import default_parameters
 from uav_common.sample_grid import on_grid
+from uav_common.settings import settings_from
 from uav_sim.scenario import Scenario, load_scenario, vehicle_scenario_path
 from uav_sim.simulation import Simulation
 
 from uav_fault_estimator.campaigns.campaign import Campaign
 from uav_fault_estimator.detection.detector import DetectorFlight
+from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.estimator_step import EstimatorStep, ResidualInput
 from uav_fault_estimator.estimation.model_calibration import SensorFlight
 from uav_fault_estimator.estimation.prediction import residual_sampler
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
 
-PACKAGE = "uav_fault_estimator"
 _AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
 def fly_and_estimate(
     scenario: Scenario,
-    residual_overrides: Mapping[str, Any] | None = None,
-    mhe_overrides: Mapping[str, Any] | None = None,
+    residual: ResidualSettings | None = None,
+    estimator: EstimatorSettings | None = None,
     true_wind: bool = False,
     model: FlownAircraft = NOMINAL,
 ) -> tuple[EstimateSeries, SeededSeries]:
     """Fly the scenario and estimate its faults every update_period_s [s] of sim time.
 
-    The estimator's parameters are mhe_node's defaults, then the scenario's `estimator`
-    overrides, then mhe_overrides. Returns the published estimates (what mhe_node would
-    publish; solve times are the estimator's update times) and the seeded faults sampled
-    at the same stamps. The models fly the air data where the aircraft has it, as
-    residual_node does. true_wind: the models get the true wind (background and
-    turbulence) instead, which no aircraft has: a bound on what better wind knowledge
-    could give. model: the aircraft the models evaluate (a model calibration's), as
-    residual_node's model_calibration_file gives it.
+    The residual generator's settings are `residual` (default: residual_node's, for the
+    scenario's vehicle), the estimator's `estimator` (default: mhe_node's, for the
+    scenario's vehicle and with the scenario's `estimator` overrides, of which mhe_node's
+    own parameters, such as qos, have no part here). Returns the published estimates
+    (what mhe_node would publish; solve times are the estimator's update times) and the
+    seeded faults sampled at the same stamps. The models fly the air data where the
+    aircraft has it, as residual_node does. true_wind: the models get the true wind
+    (background and turbulence) instead, which no aircraft has: a bound on what better
+    wind knowledge could give. model: the aircraft the models evaluate (a model
+    calibration's), as residual_node's model_calibration_file gives it.
     """
-    residual = {**default_parameters(PACKAGE, "residual_node.yaml"),
-                "vehicle": scenario.vehicle, **(residual_overrides or {})}
-    mhe = {**default_parameters(PACKAGE, "mhe_node.yaml"), "vehicle": scenario.vehicle,
-           **scenario.estimator, **(mhe_overrides or {})}
-    sampler = residual_sampler(residual, model)
-    step = EstimatorStep(mhe)
+    sampler = residual_sampler(residual or ResidualSettings(vehicle=scenario.vehicle), model)
+    step = EstimatorStep(estimator or settings_from(
+        EstimatorSettings, {"vehicle": scenario.vehicle, **scenario.estimator}))
     simulation = Simulation(scenario)
     stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
     sample = simulation.sample()
@@ -151,10 +151,9 @@ def sensor_flight(scenario: Scenario) -> SensorFlight:
 
 def fault_free_residuals(scenario: Scenario) -> np.ndarray:
     """The residuals (K, 6) residual_node would publish for the scenario with its default
-    parameters, on the update grid, where every row is valid. (y does not depend on S:
+    settings, on the update grid, where every row is valid. (y does not depend on S:
     the sensitivities' model copies are left out.)"""
-    sampler = residual_sampler({**default_parameters(PACKAGE, "residual_node.yaml"),
-                                "vehicle": scenario.vehicle, "fault_names": []})
+    sampler = residual_sampler(ResidualSettings(vehicle=scenario.vehicle, fault_names=()))
     simulation = Simulation(scenario)
     sample, rows = simulation.sample(), []
     while True:

@@ -21,8 +21,14 @@ from uav_aircraft.vehicles import DEFAULT_VEHICLE
 
 from uav_fault_estimator.detection.change_detection import Weibull
 
+# What a calibration is made with unless told otherwise; each calibration carries its own
+# (Calibration), and the detector runs with the calibration's.
 DEFAULT_SAMPLE_PERIOD_S = 0.2  # the paper's 5 Hz: the grid of every calibration made here
 DEFAULT_SETTLE_S = 30.0  # no test until the RLS has had this long after a start [s]
+# lambda_f of the RLS: a memory of about 200 samples (40 s); below 0.5 the RLS would
+# remember about two samples, nothing left to identify
+DEFAULT_FORGETTING_FACTOR = 0.995
+DEFAULT_WINDOW = 25  # M, the GLRT's window [samples]
 
 
 def simulated_airframe(vehicle: str = DEFAULT_VEHICLE) -> str:

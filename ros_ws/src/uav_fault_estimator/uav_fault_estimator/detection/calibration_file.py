@@ -1,10 +1,9 @@
 """The detector's calibration file: YAML of Calibration's fields (the layout of a vehicle
 folder's detector_calibration.yaml), written by scripts/calibrate_detector.py and read by
-detector_node, checked against the node's settings and the airframe flown. No ROS here."""
+detector_node, checked against the airframe flown. No ROS here."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -91,8 +90,8 @@ def shipped_calibration_path(vehicle: str = DEFAULT_VEHICLE) -> Path:
 
 def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibration:
     """The calibration file (empty path: the default vehicle's), checked against the airframe
-    flown, with whatever window and forgetting factor it was made for (screening offline);
-    ValueError with one line naming the file."""
+    flown, with the sample period, forgetting factor, window and settling time it was made
+    with; ValueError with one line naming the file."""
     file = Path(path) if path else shipped_calibration_path()
     try:
         data = yaml.safe_load(file.read_text())
@@ -112,17 +111,3 @@ def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibrati
             "(scripts/screen_logs.py)")
     return calibration
 
-
-def load_calibration(path: str, window: int, forgetting_factor: float,
-                     airframe: str = SIMULATED_AIRFRAME) -> Calibration:
-    """read_calibration, also checked against the node's window and forgetting factor;
-    ValueError with one line naming the file."""
-    calibration = read_calibration(path, airframe)
-    if calibration.window != window or not math.isclose(calibration.forgetting_factor,
-                                                         forgetting_factor):
-        file = Path(path) if path else shipped_calibration_path()
-        raise ValueError(
-            f"calibration file {file} was made for window {calibration.window} and "
-            f"forgetting factor {calibration.forgetting_factor}, not {window} and "
-            f"{forgetting_factor}: run scripts/calibrate_detector.py for these")
-    return calibration

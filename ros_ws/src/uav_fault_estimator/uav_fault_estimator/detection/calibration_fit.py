@@ -11,6 +11,10 @@ from typing import Any
 import numpy as np
 
 from uav_fault_estimator.detection.calibration import (
+    DEFAULT_FORGETTING_FACTOR,
+    DEFAULT_SAMPLE_PERIOD_S,
+    DEFAULT_SETTLE_S,
+    DEFAULT_WINDOW,
     MIN_SCHEDULE_SPAN_MPS,
     SIMULATED_AIRFRAME,
     Calibration,
@@ -55,17 +59,20 @@ def fit_initial_parameters(flights: Iterable[DetectorFlight], generators: tuple[
     return fitted
 
 
-def calibrate(flights: Sequence[Sequence[np.ndarray]], sample_period_s: float,
-              forgetting_factor: float, window: int, settle_s: float,
+def calibrate(flights: Sequence[Sequence[np.ndarray]],
+              sample_period_s: float = DEFAULT_SAMPLE_PERIOD_S,
+              forgetting_factor: float = DEFAULT_FORGETTING_FACTOR,
+              window: int = DEFAULT_WINDOW, settle_s: float = DEFAULT_SETTLE_S,
               airframe: str = SIMULATED_AIRFRAME, scheduled: bool = False,
               generators: tuple[str, ...] = SURFACE_GENERATORS) -> Calibration:
     """The calibration of airframe's generators (generators.GENERATORS) from fault-free
     flights on the sample grid (DetectorFlight, or (times, states, controls) without
-    airspeed): the initial parameters, then, from the RLS and GLRT run over each flight from
-    them, the parameters' spread and the Weibull fits of both statistics. scheduled: the
-    parameters' means affine in the filtered airspeed (airspeed_schedule); ScheduleError when
-    the flights' airspeeds span less than MIN_SCHEDULE_SPAN_MPS, ValueError when a generator
-    has too few samples."""
+    airspeed), made with (and carrying) the sample period [s], forgetting factor, GLRT
+    window [samples] and settling time [s]: the initial parameters, then, from the RLS and
+    GLRT run over each flight from them, the parameters' spread and the Weibull fits of
+    both statistics. scheduled: the parameters' means affine in the filtered airspeed
+    (airspeed_schedule); ScheduleError when the flights' airspeeds span less than
+    MIN_SCHEDULE_SPAN_MPS, ValueError when a generator has too few samples."""
     generators = checked_generators(tuple(generators))
     flights = [detector_flight(flight) for flight in flights]
     initial = fit_initial_parameters(flights, generators, sample_period_s, forgetting_factor)

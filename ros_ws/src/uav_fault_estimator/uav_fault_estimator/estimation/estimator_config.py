@@ -1,23 +1,18 @@
-"""Plain configuration of the fault estimators (read by the ROS node from YAML)."""
+"""Plain configuration of the fault estimators (mhe_node's made from its settings,
+estimator_settings.py)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from uav_common.channels import MODEL_FAULT_NAMES, PAPER_FAULT_NAMES
+from uav_common.channels import PAPER_FAULT_NAMES
 
 from uav_fault_estimator.estimation.fault_models import FaultModel, make_model
 from uav_fault_estimator.estimation.monotone_active_set import is_monotone
-from uav_fault_estimator.estimation.noise_model import (
-    NoiseCalibration,
-    load_noise_calibration,
-)
 from uav_fault_estimator.estimation.qp_problem import WindowQP
-from uav_fault_estimator.estimation.residuals import WIND_AIR_DATA, WIND_ERROR_NAMES
 
 ARRIVAL_CENTRES = ("filter", "previous_window")
 
@@ -72,16 +67,17 @@ class SolverSettings:
 class EstimatorConfig:
     """Moving-horizon / batch MAP estimator parameters.
 
-    horizon: N samples in the window; q_diag: residual noise variances Q (one per
-    residual channel) [residual unit²]; r_diag_pct2: the arrival cost's covariance R before
-    any data (one per fault) [%²]; arrival_inflation (>= 1) and arrival_floor_pct2 (one per
-    fault, or None for 0) [%²]: see arrival_cost.ArrivalCost; arrival_centre: "filter" (the
-    arrival filter's mean) or "previous_window" (the previous window's estimate of the first
-    point, as UAV eq. 17); faults: the estimated faults; solver: ProxSuite settings.
-    Defaults: the embedded-estimation paper's setting, N = 50, four monotonic increasing faults.
+    horizon: N samples in the window (mhe_node's default: EstimatorSettings.horizon);
+    q_diag: residual noise variances Q (one per residual channel) [residual unit²];
+    r_diag_pct2: the arrival cost's covariance R before any data (one per fault) [%²];
+    arrival_inflation (>= 1) and arrival_floor_pct2 (one per fault, or None for 0) [%²]: see
+    arrival_cost.ArrivalCost; arrival_centre: "filter" (the arrival filter's mean) or
+    "previous_window" (the previous window's estimate of the first point, as UAV eq. 17);
+    faults: the estimated faults; solver: ProxSuite settings. Defaults of the rest: the
+    embedded-estimation paper's setting, four monotonic increasing faults.
     """
 
-    horizon: int = 50
+    horizon: int
     q_diag: tuple[float, ...] = (1e-2, 1e-2, 1e-2, 1e-4, 1e-4, 1e-4)
     r_diag_pct2: tuple[float, ...] = (1.0, 1.0, 1.0, 1.0)
     faults: list[FaultConfig] = field(
@@ -147,82 +143,3 @@ class EstimatorConfig:
     def prior_pct(self) -> np.ndarray:
         """The faults before any data [%]."""
         return np.array([fault.prior_pct for fault in self.faults])
-
-
-def noise_calibration(parameters: Mapping[str, Any]) -> NoiseCalibration:
-    """The noise calibration mhe_node's parameters name ("" for the shipped one of its
-    `vehicle`)."""
-    if not parameters["noise_variance_factor"] > 0:
-        raise ValueError(f"noise_variance_factor must be positive, got "
-                         f"{parameters['noise_variance_factor']}")
-    return load_noise_calibration(parameters["noise_calibration_file"], parameters["vehicle"])
-
-
-# The one scale parameter of each fault model [%/sample] that mhe_node's flat
-# fault_model_scales_pct sets (the models' own keyword names, fault_models.py).
-SCALE_PARAMETER: dict[str, str | None] = {
-    "monotonic": "lambda_pct",
-    "monotonic_decreasing": "lambda_pct",
-    "random_walk": "sigma",
-    "uniform": "half_width_pct",
-    "laplacian": "scale_pct",
-    "constant": None,
-}
-
-
-def config_from_parameters(parameters: Mapping[str, Any], channels: int) -> EstimatorConfig:
-    """The configuration from mhe_node's flat parameters (config/mhe_node.yaml), for
-    `channels` residual channels; ValueError naming the first wrong entry. The estimated
-    columns are the faults, then the wind-estimate errors when estimate_wind_errors. Q is
-    the noise calibration's for air data (per sample the node may pass another suite's)."""
-    names = list(parameters["fault_names"])
-    unknown = [name for name in names if name not in MODEL_FAULT_NAMES]
-    if unknown or len(set(names)) != len(names) or not names:
-        raise ValueError(f"fault_names {names}: each once, at least one, of "
-                         + ", ".join(MODEL_FAULT_NAMES))
-    per_fault = ("fault_models", "fault_model_scales_pct", "fault_model_coefficients",
-                 "lower_bounds_pct", "upper_bounds_pct", "prior_pct", "handover_variances_pct2",
-                 "arrival_floor_variances_pct2")
-    for key in per_fault:
-        if len(parameters[key]) != len(names):
-            raise ValueError(f"{key} has {len(parameters[key])} entries for {len(names)} faults")
-    faults = []
-    for k, name in enumerate(names):
-        model = parameters["fault_models"][k]
-        if model not in SCALE_PARAMETER:
-            raise ValueError(f"fault {name}: unknown model '{model}', known: "
-                             + ", ".join(SCALE_PARAMETER))
-        model_parameters: dict[str, float] = {}
-        if SCALE_PARAMETER[model] is not None:
-            model_parameters[SCALE_PARAMETER[model]] = parameters["fault_model_scales_pct"][k]
-        if model == "random_walk":
-            model_parameters["coefficient"] = parameters["fault_model_coefficients"][k]
-        faults.append(FaultConfig(
-            name, model, model_parameters, lower_pct=parameters["lower_bounds_pct"][k],
-            upper_pct=parameters["upper_bounds_pct"][k], prior_pct=parameters["prior_pct"][k],
-        ))
-    handover = list(parameters["handover_variances_pct2"])
-    floor = list(parameters["arrival_floor_variances_pct2"])
-    if parameters["estimate_wind_errors"]:  # nuisance parameters: random walks [m/s]
-        faults += [FaultConfig(name, "random_walk", {"sigma": parameters["wind_error_sigma_mps"]})
-                   for name in WIND_ERROR_NAMES]
-        handover += [parameters["wind_error_handover_variance_m2ps2"]] * len(WIND_ERROR_NAMES)
-        floor += [0.0] * len(WIND_ERROR_NAMES)
-    config = EstimatorConfig(
-        horizon=parameters["horizon"],
-        q_diag=tuple(noise_calibration(parameters).q_diag(WIND_AIR_DATA,
-                                                          parameters["noise_variance_factor"])),
-        r_diag_pct2=tuple(handover),
-        faults=faults,
-        solver=SolverSettings(eps_abs=parameters["solver_eps_abs"],
-                              max_iter=parameters["solver_max_iter"],
-                              budget_ms=parameters["update_budget_ms"],
-                              method=parameters["solver_method"]),
-        arrival_inflation=parameters["arrival_inflation"],
-        arrival_floor_pct2=tuple(floor),
-        arrival_centre=parameters["arrival_centre"],
-    )
-    if len(config.q_diag) != channels:
-        raise ValueError(f"the noise calibration needs {channels} channels")
-    config.validate()
-    return config

@@ -10,16 +10,15 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from uav_fault_estimator.estimation.estimator_config import (
-    EstimatorConfig,
-    config_from_parameters,
-    noise_calibration,
+from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
+from uav_fault_estimator.estimation.estimator_settings import (
+    EstimatorSettings,
+    config_from_settings,
 )
 from uav_fault_estimator.estimation.mhe import (
     EstimateResult,
@@ -27,7 +26,11 @@ from uav_fault_estimator.estimation.mhe import (
     missing_samples,
 )
 from uav_fault_estimator.estimation.model_fit import FitVerdict, ModelFit
-from uav_fault_estimator.estimation.noise_model import SUITES, SuiteNoise
+from uav_fault_estimator.estimation.noise_model import (
+    SUITES,
+    SuiteNoise,
+    load_noise_calibration,
+)
 from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 
 # The estimator has settled this long [s of sim time] after the first residual: errors are
@@ -88,19 +91,21 @@ def fault_reported(estimates_pct: np.ndarray) -> bool:
 
 
 class EstimatorStep:
-    """mhe_node's estimator from its parameters (config/mhe_node.yaml's keys), one step
-    per residual sample; reset for a new flight, retune for changed live parameters."""
+    """mhe_node's estimator from its settings, one step per residual sample; reset for a
+    new flight, retune for changed live settings. The noise calibration the settings name
+    is read once, here (ValueError naming the file, or the first wrong setting)."""
 
-    def __init__(self, parameters: Mapping[str, Any]) -> None:
-        self.parameters = dict(parameters)
-        self.published_names = list(parameters["fault_names"])
+    def __init__(self, settings: EstimatorSettings) -> None:
+        self.settings = settings
+        self.noise_calibration = load_noise_calibration(settings.noise_calibration_file,
+                                                        settings.vehicle)
+        self.published_names = list(settings.fault_names)
         self.estimator = MovingHorizonEstimator(
-            config_from_parameters(parameters, len(RESIDUAL_CHANNELS)))
+            config_from_settings(settings, self.noise_calibration))
         self.estimated_names = self.estimator.column_names  # faults, then any nuisance
-        calibration = noise_calibration(parameters)
-        self.noise = SuiteNoise(calibration, parameters["noise_variance_factor"])
-        self.model_fit = ModelFit(calibration, parameters["model_fit_window_s"],
-                                  parameters["model_fit_threshold_sigmas"], SETTLE_S)
+        self.noise = SuiteNoise(self.noise_calibration, settings.noise_variance_factor)
+        self.model_fit = ModelFit(self.noise_calibration, settings.model_fit_window_s,
+                                  settings.model_fit_threshold_sigmas, SETTLE_S)
         self.window_stamps_s: deque[float] = deque(maxlen=self.estimator.config.horizon)
 
     @property
@@ -116,12 +121,12 @@ class EstimatorStep:
         self.model_fit.reset()
         self.window_stamps_s.clear()
 
-    def retune(self, changes: Mapping[str, Any]) -> None:
-        """Apply changed live parameters from the next sample on (ValueError: none)."""
-        parameters = {**self.parameters, **changes}
-        self.estimator.retune(config_from_parameters(parameters, len(RESIDUAL_CHANNELS)))
-        self.noise.variance_factor = parameters["noise_variance_factor"]
-        self.parameters = parameters
+    def retune(self, settings: EstimatorSettings) -> None:
+        """Apply settings whose live ones changed from the next sample on (ValueError:
+        none); the noise calibration is the one read at start."""
+        self.estimator.retune(config_from_settings(settings, self.noise_calibration))
+        self.noise.variance_factor = settings.noise_variance_factor
+        self.settings = settings
 
     def bridge(self, gap_s: float) -> None:
         """A gap of gap_s [s] in the samples: the window moves on by the samples missed."""

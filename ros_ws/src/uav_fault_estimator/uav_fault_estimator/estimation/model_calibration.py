@@ -21,9 +21,8 @@ No ROS here.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from proxsuite import proxqp
@@ -42,6 +41,7 @@ from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration,
 from uav_fault_estimator.estimation.prediction import AircraftPredictor
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
 from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import (
     WIND_AIR_DATA,
     WIND_FILTERED,
@@ -87,19 +87,19 @@ def residual_weights(noise: NoiseCalibration) -> np.ndarray:
 
 
 def flight_terms(flight: SensorFlight, model: FlownAircraft, names: Sequence[str],
-                 residual_parameters: Mapping[str, Any], weights: np.ndarray) -> FlightTerms:
+                 residual: ResidualSettings, weights: np.ndarray) -> FlightTerms:
     """Run the flight through a residual generator whose models are `model` (of the vehicle
-    residual_parameters names) and whose columns are the named parameters' sensitivities
+    the residual settings name) and whose columns are the named parameters' sensitivities
     [residual unit per parameter unit]; its normal equations on residual_node's update grid
     (rows valid and plausible only)."""
-    vehicle = load_vehicle(residual_parameters["vehicle"])
+    vehicle = load_vehicle(residual.vehicle)
     parameters = [model_parameter(name, vehicle) for name in names]
-    generator = _generator(model, parameters, residual_parameters)
+    generator = _generator(model, parameters, residual)
     n = len(parameters)
     gram, linear, chi_square, rows = np.zeros((n, n)), np.zeros(n), 0.0, 0
     order = [generator.column_names.index(p.name) for p in parameters]
     per_unit = np.array([_column_per_unit(p) for p in parameters])
-    for sample in _grid_samples(generator, flight, residual_parameters, flight.air_data):
+    for sample in _grid_samples(generator, flight, residual, flight.air_data):
         term = sample_normal_equations(sample.residual, sample.sensitivity[:, order] * per_unit,
                                        sample.valid, weights, n)
         gram += term.gram
@@ -119,15 +119,15 @@ class SuiteResiduals:
 
 
 def noise_residuals(flight: SensorFlight, model: FlownAircraft,
-                    residual_parameters: Mapping[str, Any]) -> SuiteResiduals:
+                    residual: ResidualSettings) -> SuiteResiduals:
     """The model's residuals per noise suite on the flight: the samples that flew the air
     data, and the whole flight flown again on the filtered wind alone (the other suite's
     noise from the same flight)."""
     residuals, times = {}, {}
     for suite, air_data in ((SUITES[WIND_AIR_DATA], flight.air_data),
                             (SUITES[WIND_FILTERED], np.full_like(flight.air_data, np.nan))):
-        samples = [s for s in _grid_samples(_generator(model, (), residual_parameters), flight,
-                                            residual_parameters, air_data)
+        samples = [s for s in _grid_samples(_generator(model, (), residual), flight,
+                                            residual, air_data)
                    if SUITES[s.wind_source] == suite]
         residuals[suite] = np.array([s.residual for s in samples]).reshape(-1, 6)
         times[suite] = np.array([s.time_s for s in samples])
@@ -135,12 +135,12 @@ def noise_residuals(flight: SensorFlight, model: FlownAircraft,
 
 
 def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
-                  residual_parameters: Mapping[str, Any],
+                  residual: ResidualSettings,
                   air_data: np.ndarray) -> Iterator[ResidualSample]:
     """The generator's samples on residual_node's update grid whose rows are all valid.
     Samples it refuses (a stamp that does not increase, a state the models cannot evaluate)
     are left out, as residual_node leaves them out."""
-    sampler = ResidualSampler(generator, float(residual_parameters["update_period_s"]))
+    sampler = ResidualSampler(generator, residual.update_period_s)
     for k, time_s in enumerate(flight.times_s):
         try:
             sample = sampler.update(time_s, flight.states[k], flight.controls[k],
@@ -152,16 +152,16 @@ def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
 
 
 def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
-               residual_parameters: Mapping[str, Any]) -> ResidualGenerator:
+               residual: ResidualSettings) -> ResidualGenerator:
     """residual_node's generator with `model`'s copies, columns per parameter: a model copy
     moved by the parameter's step, or for an air-data bias the bias moved by it."""
-    p = residual_parameters
-    vehicle = load_vehicle(p["vehicle"])
+    vehicle = load_vehicle(residual.vehicle)
     propeller = Propeller.from_vehicle(vehicle)
     copies = [q.name for q in parameters if not q.is_bias]
     return ResidualGenerator(
         lambda changes: AircraftPredictor({}, vehicle, propeller, changed(model, changes)),
-        copies, SCALE_STEP_PCT, p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
+        copies, SCALE_STEP_PCT, residual.tau_a_s, residual.sensitivity_period_s,
+        residual.recovery_s,
         sensor_bias=model.sensor_bias,
         bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias},
         air_data_range=vehicle.air_data_range)
@@ -211,16 +211,16 @@ class CalibrationError(RuntimeError):
 
 
 def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
-              residual_parameters: Mapping[str, Any], noise: NoiseCalibration,
+              residual: ResidualSettings, noise: NoiseCalibration,
               map_flights: MapFlights = map, log: Callable[[str], None] = print,
               measured: FlownAircraft = NOMINAL) -> ModelCalibration:
     """Identify the named parameters from the flights (the module docstring's problem).
     map_flights(function, flights) runs a function on every flight (a process pool's map,
     or map); log receives one line per step. measured: the aircraft as measured on the
     ground (its mass properties weighed and swung, say): the fit starts from it, its prior
-    is about it, and every parameter not named keeps its value. The vehicle is
-    residual_parameters' (residual_node's `vehicle`)."""
-    vehicle = load_vehicle(residual_parameters["vehicle"])
+    is about it, and every parameter not named keeps its value. The vehicle is the
+    residual settings' (residual_node's `vehicle`)."""
+    vehicle = load_vehicle(residual.vehicle)
     parameters = [model_parameter(name, vehicle) for name in names]
     names = tuple(names)
     prior_inverse = np.diag([1.0 / p.prior_std**2 for p in parameters])
@@ -230,7 +230,7 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
     theta = np.zeros(len(names))
     for step in range(1, MAX_STEPS + 1):
         model = changed(measured, dict(zip(names, theta, strict=True)))
-        terms = list(map_flights(_TermsAt(model, names, residual_parameters, weights), flights))
+        terms = list(map_flights(_TermsAt(model, names, residual, weights), flights))
         gram = sum(t.gram for t in terms) + prior_inverse
         linear = sum(t.linear for t in terms) - prior_inverse @ theta
         chi_square = sum(t.chi_square for t in terms)
@@ -244,7 +244,7 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
         if np.all(np.abs(delta) <= CONVERGED_SIGMAS * deviation):
             break
     model = changed(measured, dict(zip(names, theta, strict=True)))
-    final = list(map_flights(_TermsAt(model, names, residual_parameters, weights), flights))
+    final = list(map_flights(_TermsAt(model, names, residual, weights), flights))
     rows = sum(t.rows for t in final)
     reduced = sum(t.chi_square for t in final) / max(rows - len(names), 1)
     covariance = np.linalg.inv(sum(t.gram for t in final) + prior_inverse) * max(reduced, 1.0)
@@ -255,7 +255,7 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
         prior_mean=np.array(list(values_of(measured, names).values())),
         prior_std=np.array([p.prior_std for p in parameters]), posterior_std=deviation,
         correlations=covariance / np.outer(deviation, deviation), steps=step,
-        reduced_chi_square=reduced, **_per_suite(map_flights(_NoiseAt(model, residual_parameters),
+        reduced_chi_square=reduced, **_per_suite(map_flights(_NoiseAt(model, residual),
                                                              flights)))
 
 
@@ -274,12 +274,11 @@ class _TermsAt:
 
     model: FlownAircraft
     names: tuple[str, ...]
-    residual_parameters: Mapping[str, Any]
+    residual: ResidualSettings
     weights: np.ndarray
 
     def __call__(self, flight: SensorFlight) -> FlightTerms:
-        return flight_terms(flight, self.model, self.names, self.residual_parameters,
-                            self.weights)
+        return flight_terms(flight, self.model, self.names, self.residual, self.weights)
 
 
 @dataclass(frozen=True)
@@ -287,10 +286,10 @@ class _NoiseAt:
     """noise_residuals at one model, as a picklable callable of the flight."""
 
     model: FlownAircraft
-    residual_parameters: Mapping[str, Any]
+    residual: ResidualSettings
 
     def __call__(self, flight: SensorFlight) -> SuiteResiduals:
-        return noise_residuals(flight, self.model, self.residual_parameters)
+        return noise_residuals(flight, self.model, self.residual)
 
 
 def _bounded_step(gram: np.ndarray, linear: np.ndarray, lower: np.ndarray,

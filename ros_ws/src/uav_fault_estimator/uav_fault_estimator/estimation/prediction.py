@@ -1,7 +1,7 @@
 """The prediction model phi: a vehicle's accelerations at a measured state.
 
 Embedded-estimation paper, eq. 6: a_hat = phi(p, v, u, zeta, w_hat | f). The model is the
-JSBSim vehicle the simulator flies (uav_sim's aircraft folder, one source of truth,
+JSBSim vehicle the simulator flies (uav_aircraft's aircraft folder, one source of truth,
 docs/design.md), evaluated with `run_ic()`, which computes the accelerations of a given state
 without integrating. Per evaluation:
 
@@ -28,7 +28,6 @@ wind the air-relative and ground velocities change alike; the filtered wind's ow
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
 
 import jsbsim
 import numpy as np
@@ -51,6 +50,7 @@ from uav_aircraft.vehicles import Vehicle, load_vehicle
 from uav_common.channels import CONTROL_CHANNELS, MODEL_FAULT_NAMES, STATE_CHANNELS
 
 from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import PredictorFactory, ResidualGenerator
 
 _STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
@@ -150,23 +150,22 @@ def aircraft_predictor_factory(vehicle: Vehicle,
     return lambda faults_pct: AircraftPredictor(faults_pct, vehicle, propeller, aircraft)
 
 
-def residual_generator(parameters: Mapping[str, Any],
+def residual_generator(settings: ResidualSettings,
                        model: FlownAircraft = NOMINAL) -> ResidualGenerator:
-    """residual_node's generator from its parameters (config/residual_node.yaml's keys,
-    `vehicle` the aircraft its copies load), its models the aircraft a model calibration
-    found (model; its air-data bias taken out)."""
-    p = parameters
-    vehicle = load_vehicle(p["vehicle"])
+    """residual_node's generator from its settings (`vehicle` the aircraft its copies load),
+    its models the aircraft a model calibration found (model; its air-data bias taken
+    out)."""
+    vehicle = load_vehicle(settings.vehicle)
     return ResidualGenerator(
-        aircraft_predictor_factory(vehicle, model), p["fault_names"],
-        p["secant_step_pct"], p["tau_a_s"], p["sensitivity_period_s"], p["recovery_s"],
-        p["wind_error_step_mps"], model.sensor_bias, air_data_range=vehicle.air_data_range,
+        aircraft_predictor_factory(vehicle, model), settings.fault_names,
+        settings.secant_step_pct, settings.tau_a_s, settings.sensitivity_period_s,
+        settings.recovery_s, settings.wind_error_step_mps, model.sensor_bias,
+        air_data_range=vehicle.air_data_range,
     )
 
 
-def residual_sampler(parameters: Mapping[str, Any],
+def residual_sampler(settings: ResidualSettings,
                      model: FlownAircraft = NOMINAL) -> ResidualSampler:
     """residual_node's generator (residual_generator) on its update grid
     (update_period_s)."""
-    return ResidualSampler(residual_generator(parameters, model),
-                           float(parameters["update_period_s"]))
+    return ResidualSampler(residual_generator(settings, model), settings.update_period_s)

@@ -4,7 +4,8 @@ Subscribes `state` and `controls` (matched by stamp), and where they come `air_d
 airspeed, for a calibration scheduled on airspeed) and `autopilot_setpoints` (for the
 tracking generators); on the calibration's sample grid (every 0.2 s of sim time) runs the
 calibration's RLS residual generators, their GLRT and the parameter-deviation test
-(detection/; Blanke & Hansen) and publishes `faults/alarm` (FaultAlarm, stamped like the
+(detection/; Blanke & Hansen), with the forgetting factor, window and settling time the
+calibration was made with, and publishes `faults/alarm` (FaultAlarm, stamped like the
 sample), and `/diagnostics`.
 """
 
@@ -15,7 +16,6 @@ import sys
 from typing import Any
 
 from rclpy.node import Node
-from uav_aircraft.ros.vehicle_parameter import VEHICLE_PARAMETER
 from uav_common.envelope import (
     AIR_DATA_LIMITS,
     CONTROL_LIMITS,
@@ -35,10 +35,10 @@ from uav_common.ros.node_life import run_node, when_subscribed
 from uav_common.ros.parameters import (
     QOS_PARAMETER,
     WAIT_FOR_SUBSCRIBERS_PARAMETER,
-    ParameterSpec,
     declare_parameters,
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
+from uav_common.settings import parameter_specs, settings_from
 from uav_fault_msgs.msg import (
     AircraftState,
     AirData,
@@ -47,30 +47,17 @@ from uav_fault_msgs.msg import (
     FaultAlarm,
 )
 
-from uav_fault_estimator.detection.calibration import simulated_airframe
-from uav_fault_estimator.detection.calibration_file import (
-    load_calibration,
-    shipped_calibration_path,
+from uav_fault_estimator.detection.detector import DetectorSample
+from uav_fault_estimator.detection.detector_settings import (
+    DetectorSettings,
+    self_tuning_detector,
 )
-from uav_fault_estimator.detection.detector import DetectorSample, SelfTuningDetector
 from uav_fault_estimator.detection.generators import NO_SETPOINTS
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
+# The core's settings (DetectorSettings), then the node's own.
 PARAMETERS = {
-    "vehicle": VEHICLE_PARAMETER,
-    "calibration_file": ParameterSpec("detector calibration YAML; empty: the vehicle's "
-                                      "detector_calibration.yaml", ""),
-    "airframe": ParameterSpec("the airframe flown: the calibration must be of it; empty: the "
-                              "vehicle as simulated (<vehicle>_sim)", ""),
-    "window": ParameterSpec("M: GLRT window; must be the calibration's [samples of 0.2 s]", 25,
-                            2, 1000),
-    # below 0.5 the RLS remembers about two samples: nothing left to identify
-    "forgetting_factor": ParameterSpec(
-        "lambda_f of the RLS (memory about 200 samples, 40 s); must be the calibration's",
-        0.995, 0.5, 1.0),
-    "false_alarm_probability": ParameterSpec(
-        "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds", 0.01,
-        1e-9, 0.5, live=True),
+    **parameter_specs(DetectorSettings),
     "qos": QOS_PARAMETER,
     "wait_for_subscribers": WAIT_FOR_SUBSCRIBERS_PARAMETER,
 }
@@ -89,10 +76,7 @@ class DetectorNode(Node):
     def __init__(self) -> None:
         super().__init__("detector_node")
         p = declare_parameters(self, PARAMETERS, self.retune)
-        calibration = load_calibration(
-            p["calibration_file"] or str(shipped_calibration_path(p["vehicle"])), p["window"],
-            p["forgetting_factor"], p["airframe"] or simulated_airframe(p["vehicle"]))
-        self.detector = SelfTuningDetector(calibration, p["false_alarm_probability"])
+        self.detector = self_tuning_detector(settings_from(DetectorSettings, p))
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", qos)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,

@@ -14,8 +14,6 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
-from uav_aircraft.ros.vehicle_parameter import VEHICLE_PARAMETER
-from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
 from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
 from uav_common.ros.messages import BODY_FRAME, header
@@ -28,9 +26,11 @@ from uav_common.ros.parameters import (
     declare_parameters,
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
+from uav_common.settings import parameter_specs, replaced, settings_from
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY, SOLVER_METHODS
+from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.estimator_step import (
     EstimatorStep,
     RejectedSampleError,
@@ -38,7 +38,7 @@ from uav_fault_estimator.estimation.estimator_step import (
     StepResult,
     warm_up_text,
 )
-from uav_fault_estimator.estimation.mhe import SUSPECT_SIGMAS, EstimateResult
+from uav_fault_estimator.estimation.mhe import EstimateResult
 from uav_fault_estimator.estimation.model_fit import DOES_NOT_FIT, FitVerdict
 from uav_fault_estimator.estimation.saved_estimate import (
     SavedEstimate,
@@ -50,83 +50,9 @@ from uav_fault_estimator.estimation.solve_status import SolveStatus
 from uav_fault_estimator.nodes.matched_streams import guarded
 from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
 
-# Ranges: per-fault values in percent of the aircraft's own coefficient, at most ten times
-# it; variances and scales positive where the estimator divides by them; the horizon at
-# most 2000 samples (1000 s at 0.5 s, three times the default flight): the QP grows with it.
-# Live: the weights and tolerances (MovingHorizonEstimator.retune); the rest shapes the QP.
-PAPER_FAULTS = len(PAPER_FAULT_NAMES)  # the paper's setting: N = 50, four monotonic faults
+# The core's settings (EstimatorSettings), then the node's own.
 PARAMETERS = {
-    "vehicle": VEHICLE_PARAMETER,
-    "fault_names": ParameterSpec("the estimated faults: columns of the residuals' S, by name",
-                                 list(PAPER_FAULT_NAMES)),
-    "fault_models": ParameterSpec(
-        "per fault: monotonic, monotonic_decreasing, random_walk, uniform, laplacian or "
-        "constant", ["monotonic"] * PAPER_FAULTS),
-    "fault_model_scales_pct": ParameterSpec(
-        "per fault: the model's scale: lambda (monotonic: mean increment), sigma "
-        "(random_walk), a (uniform: |increment| <= a; laplacian: cost |increment| / a); "
-        "unused for constant [%/sample]", [0.5] * PAPER_FAULTS, 1e-6, 100.0),
-    "fault_model_coefficients": ParameterSpec(
-        "per fault: a in f(t+1) = a f(t) + gamma (random_walk only; 1 elsewhere)",
-        [1.0] * PAPER_FAULTS, 0.0, 2.0),
-    # a loss or an increase is never negative
-    "lower_bounds_pct": ParameterSpec("per fault: lower bound on f [%]", [0.0] * PAPER_FAULTS,
-                                      -1000.0, 1000.0),
-    "upper_bounds_pct": ParameterSpec("per fault: upper bound on f [%]",
-                                      [100.0] * PAPER_FAULTS, -1000.0, 1000.0),
-    "prior_pct": ParameterSpec("per fault: f before any data [%]", [0.0] * PAPER_FAULTS,
-                               -1000.0, 1000.0),
-    "horizon": ParameterSpec("N: residual samples in the moving window", 50, 2, 2000),
-    "noise_calibration_file": ParameterSpec(
-        "residual noise per sensor suite (scripts/calibrate_estimator.py); empty: the "
-        "vehicle's residual_noise.yaml", ""),
-    # 4: tuned on the default scenario (16, the AR(1) white equivalent of the 0.88
-    # correlation after F_a, delays the ramps; docs/estimator.md)
-    "noise_variance_factor": ParameterSpec(
-        "Q = this factor times the calibrated variances of the sample's sensor suite "
-        "(correlated noise: fewer independent samples than the window holds); a change "
-        "reweights the window", 4.0, 1e-3, 1e6, live=True),
-    "handover_variances_pct2": ParameterSpec(
-        "R of eq. 17: per fault, the arrival cost's variance before any data [%^2]; a change "
-        "restarts the arrival cost at its mean with this variance", [1.0] * PAPER_FAULTS,
-        1e-6, 1e6, live=True),
-    "arrival_inflation": ParameterSpec(
-        "factor (>= 1) on the arrival cost's covariance every sample: forget old data "
-        "faster", 1.0, 1.0, 10.0, live=True),
-    "arrival_floor_variances_pct2": ParameterSpec(
-        "per fault: the least variance of the arrival cost [%^2]", [0.0] * PAPER_FAULTS, 0.0,
-        1e6, live=True),
-    "arrival_centre": ParameterSpec(
-        "where the arrival cost is centred: filter (the arrival filter's mean) or "
-        "previous_window (the previous window's estimate, as the paper)", "filter"),
-    # off: with air data the wind errors only add weakly observable columns (measured:
-    # fault-free largest estimate 1.73 vs 0.57 %, docs/estimator.md)
-    "estimate_wind_errors": ParameterSpec(
-        "also estimate the wind-estimate errors (S columns *_error of residual_node) as "
-        "random-walk nuisance parameters", False),
-    "wind_error_sigma_mps": ParameterSpec(
-        "random-walk step of each wind error per residual sample [m/s]", 0.2, 1e-4, 10.0),
-    "wind_error_handover_variance_m2ps2": ParameterSpec(
-        "R of eq. 17 for each wind error [m^2/s^2]", 1.0, 1e-6, 1e4, live=True),
-    # active_set: about half ProxSuite's update time (docs/results.md)
-    "solver_method": ParameterSpec(
-        "proxsuite (any fault model) or active_set (exact, for monotonic faults only; "
-        "ProxSuite solves the windows where it does not settle in 30 rounds)", "proxsuite"),
-    "solver_eps_abs": ParameterSpec("ProxSuite's absolute tolerance (on the scaled problem)",
-                                    1e-6, 1e-12, 0.1, live=True),
-    "solver_max_iter": ParameterSpec("ProxSuite's iteration limit per update", 200, 1, 100000,
-                                     live=True),
-    "update_budget_ms": ParameterSpec(
-        "an update longer than this drops the window's oldest sample beyond "
-        f"{SUSPECT_SIGMAS:g} noise deviations, a glitch the gates let through [ms]", 100.0,
-        0.01, 60000.0, live=True),
-    "model_fit_window_s": ParameterSpec(
-        "the model_fit status judges the fault-free residuals of this much sim time [s]", 60.0,
-        5.0, 3600.0),
-    # 6: fault-free flights of the model itself reach 3.7-5.0 (docs/model_calibration.md)
-    "model_fit_threshold_sigmas": ParameterSpec(
-        "model_fit says 'does not fit: recalibrate' when a residual's window mean is beyond "
-        "this many of its deviations", 6.0, 0.5, 1000.0),
+    **parameter_specs(EstimatorSettings),
     "state_file": ParameterSpec(
         "file for the last estimate: a restart within the flight (a first residual later "
         "than the saved one) starts from it; empty: none", ""),
@@ -141,13 +67,13 @@ class MheNode(Node):
 
     def __init__(self) -> None:
         super().__init__("mhe_node")
-        self.parameters = declare_parameters(self, PARAMETERS, self.retune)
-        self.step = EstimatorStep(self.parameters)
+        p = declare_parameters(self, PARAMETERS, self.retune)
+        self.step = EstimatorStep(settings_from(EstimatorSettings, p))
         self.names = self.step.published_names
         self.estimated = self.step.estimated_names  # faults, then any nuisance parameters
-        qos = STREAM_QOS_PROFILES[self.parameters["qos"]]
+        qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", qos)
-        when_subscribed(self, self.publisher, self.parameters["wait_for_subscribers"],
+        when_subscribed(self, self.publisher, p["wait_for_subscribers"],
                         lambda: self.create_subscription(
                             Residuals, "residuals", self.on_residuals, qos))
         self.diagnostics = Diagnostics(self)
@@ -156,15 +82,14 @@ class MheNode(Node):
                        "stamp_resets": 0, "gaps": 0, "held": 0,
                        **{f"solved_by_{method}": 0 for method in SOLVER_METHODS}}
         self.stamps = GuardedStream()
-        self.state_file = Path(self.parameters["state_file"]) if self.parameters[
-            "state_file"] else None
+        self.state_file = Path(p["state_file"]) if p["state_file"] else None
         self.saved = self.saved_estimate()
         self.get_logger().info(warm_up_text(self.step.config))
 
     def retune(self, changes: dict[str, Any]) -> None:
         """Apply changed live parameters from the next residual on (ParameterError: none)."""
         try:
-            self.step.retune(changes)
+            self.step.retune(replaced(self.step.settings, changes))
         except ValueError as error:
             raise ParameterError(str(error)) from None
         self.get_logger().info("retuned: " + ", ".join(

@@ -16,8 +16,6 @@ import time
 
 from rclpy.node import Node
 from uav_aircraft.flown_aircraft import NOMINAL
-from uav_aircraft.ros.vehicle_parameter import VEHICLE_PARAMETER
-from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.envelope import (
     AIR_DATA_LIMITS,
     CONTROL_LIMITS,
@@ -36,6 +34,7 @@ from uav_common.ros.parameters import (
     declare_parameters,
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
+from uav_common.settings import parameter_specs, settings_from
 from uav_fault_msgs.msg import AircraftState, AirData, ControlInputs, Residuals, WindEstimate
 
 from uav_fault_estimator.estimation.model_file import (
@@ -44,6 +43,7 @@ from uav_fault_estimator.estimation.model_file import (
     shipped_model,
 )
 from uav_fault_estimator.estimation.prediction import residual_sampler
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import (
     RESIDUAL_CHANNELS,
     WIND_AIR_DATA,
@@ -51,24 +51,9 @@ from uav_fault_estimator.estimation.residuals import (
 )
 from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
+# The core's settings (ResidualSettings), then the node's own.
 PARAMETERS = {
-    "vehicle": VEHICLE_PARAMETER,
-    "fault_names": ParameterSpec("faults whose sensitivities are computed: the columns of S",
-                                 list(PAPER_FAULT_NAMES)),
-    "secant_step_pct": ParameterSpec("secant step s of the sensitivity, eq. 8 / 15 [%]", 5.0,
-                                     0.01, 100.0),
-    "tau_a_s": ParameterSpec(
-        "time constant of the smoothing filter F_a, eq. 5-6 (the paper's 4 s) [s]", 4.0, 0.1,
-        100.0),
-    "update_period_s": ParameterSpec(
-        "residuals are published every this much simulation time [s]", 0.5, 0.01, 60.0),
-    "sensitivity_period_s": ParameterSpec(
-        "S is recomputed every this much simulation time; 0: every sample [s]", 0.5, 0.0, 60.0),
-    "recovery_s": ParameterSpec(
-        "rows stay invalid this long after the start and after a missing channel is "
-        "back (3 tau_a) [s]", 12.0, 0.0, 600.0),
-    "wind_error_step_mps": ParameterSpec(
-        "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 0.0, 10.0),
+    **parameter_specs(ResidualSettings),
     "model_calibration_file": ParameterSpec(
         "model calibration YAML (scripts/calibrate_model.py); empty: the vehicle's XML as "
         "shipped", ""),
@@ -87,15 +72,13 @@ class ResidualNode(Node):
 
     def __init__(self) -> None:
         super().__init__("residual_node")
-        self.parameters = declare_parameters(self, PARAMETERS)
-        p = self.parameters
-        if not p["update_period_s"] > 0:
-            raise ValueError(f"update_period_s must be positive, got {p['update_period_s']}")
+        p = declare_parameters(self, PARAMETERS)
+        settings = settings_from(ResidualSettings, p)
         calibration = p["model_calibration_file"]
-        self.model = calibration or shipped_model(p["vehicle"])
+        self.model = calibration or shipped_model(settings.vehicle)
         self.sampler = residual_sampler(
-            p, load_model_calibration(calibration, p["vehicle"]).aircraft if calibration
-            else NOMINAL)
+            settings, load_model_calibration(calibration, settings.vehicle).aircraft
+            if calibration else NOMINAL)
         self.generator = self.sampler.generator
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(Residuals, "residuals", qos)

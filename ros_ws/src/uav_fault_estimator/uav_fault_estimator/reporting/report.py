@@ -12,11 +12,11 @@ import numpy as np
 from uav_aircraft.flown_aircraft import DIAGNOSTIC_KEY as FLOWN_AIRCRAFT_KEY
 from uav_common.health import CPU_KEY, GUIDANCE_FALLBACKS_KEY, GUIDANCE_KEY, hardware_id
 from uav_common.message_fields import stamp_seconds
-from uav_common.package_data import default_parameters
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
 from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
 from uav_fault_estimator.estimation.model_file import MODEL_KEY
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.recording.project_bag import WALL_S, RecordingError
 from uav_fault_estimator.reporting.metrics import (
     AlarmSeries,
@@ -151,7 +151,7 @@ def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
                 settle_s: float = SETTLE_S,
                 threshold_pct: float = DETECTION_THRESHOLD_PCT) -> dict:
     """metrics.json as docs/design.md lays it out. update_period_s [s]: residual_node's, one
-    estimate per residual (default: its default parameter, config/residual_node.yaml)."""
+    estimate per residual (default: its default, ResidualSettings)."""
     if update_period_s is None:
         update_period_s = residual_update_period_s()
     faults, false_alarms = fault_metrics(run.estimates, run.seeded, settle_s, threshold_pct)
@@ -177,10 +177,9 @@ def run_metrics(run: Run, scenario: str, update_period_s: float | None = None,
 
 
 def residual_update_period_s() -> float:
-    """residual_node's default update_period_s [s] (config/residual_node.yaml, its one
-    home): the nodes publish a residual and an estimate every this much sim time."""
-    parameters = default_parameters("uav_fault_estimator", "residual_node.yaml")
-    return float(parameters["update_period_s"])
+    """residual_node's default update_period_s [s] (ResidualSettings, its one home): the
+    nodes publish a residual and an estimate every this much sim time."""
+    return ResidualSettings().update_period_s
 
 
 def table(metrics: dict) -> str:
