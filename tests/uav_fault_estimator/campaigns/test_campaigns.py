@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+from pathlib import Path
 
 import cloudpickle
 import numpy as np
 import pytest
 from uav_fault_estimator.campaigns.campaign import (
+    CODE_PACKAGES,
     Campaign,
     CampaignOptions,
     TaskCache,
@@ -132,3 +134,14 @@ def test_a_campaign_stopped_by_ctrl_c_resumes_with_only_the_missing_tasks(tmp_pa
     resumed = run_campaign(fly_or_be_interrupted, tasks, "resumed", cached)
     assert (resumed.cached, resumed.computed) == (3, 3)  # seeds 1-3 kept, 4-6 flown
     assert same(resumed.results, run_campaign(fly, tasks, "serial", SERIAL).results)
+
+
+@pytest.mark.timeout(30)
+def test_the_cache_key_covers_every_project_package_a_flight_imports():
+    """A cached flight is stale when any project code it ran changed: every package of the
+    workspace that the offline chain imports is one code_version hashes."""
+    workspace_src = Path(__file__).resolve().parents[3] / "ros_ws" / "src"
+    project = {path.name for path in workspace_src.iterdir() if (path / "setup.py").exists()}
+    imported = {name.split(".")[0] for name in sys.modules} & project
+    assert "uav_aircraft" in imported
+    assert imported <= set(CODE_PACKAGES), imported - set(CODE_PACKAGES)

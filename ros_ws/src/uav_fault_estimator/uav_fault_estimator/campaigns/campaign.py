@@ -55,7 +55,7 @@ from uav_fault_estimator.campaigns.cluster_security import (
 )
 
 # The packages whose code and data a task's result may depend on.
-CODE_PACKAGES = ("uav_common", "uav_sim", "uav_fault_estimator")
+CODE_PACKAGES = ("uav_common", "uav_aircraft", "uav_sim", "uav_fault_estimator")
 PICKLE_PROTOCOL = 5
 LOCALHOST = "127.0.0.1"
 # Local workers' housekeeping made rare: Dask's defaults (the event loop's health checked
