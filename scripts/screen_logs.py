@@ -63,7 +63,6 @@ from uav_fault_estimator.campaigns.campaign import (
     run_campaign,
 )
 from uav_fault_estimator.campaigns.cluster_security import ClusterAddressError
-from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_FORGETTING_FACTOR,
     DEFAULT_SAMPLE_PERIOD_S,
@@ -103,6 +102,7 @@ from uav_fault_estimator.flight_logs.screening import (
     plot_screening,
     write_alarm_csv,
 )
+from uav_fault_estimator.reporting.calibration_output import write_calibration
 
 PROGRAM = "screen_logs.py"
 
