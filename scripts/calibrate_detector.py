@@ -34,7 +34,6 @@ from uav_fault_estimator.campaigns.campaign import (
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.chain.offline import (
     describe_flights,
     fault_free_flights,
@@ -48,6 +47,7 @@ from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
 from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
+from uav_fault_estimator.reporting.calibration_output import write_calibration
 
 FIRST_SEED = 101
 

@@ -29,13 +29,13 @@ from uav_fault_estimator.campaigns.campaign import (
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.chain.offline import (
     describe_flights,
     fault_free_flights,
     fault_free_residuals,
 )
 from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD, SUITES, fit_noise
+from uav_fault_estimator.reporting.calibration_output import write_calibration
 from uav_sim.scenario import SensorSuite
 
 FIRST_SEED = 301

@@ -47,7 +47,6 @@ from uav_fault_estimator.campaigns.campaign import (
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.chain.calibration_output import write_calibration
 from uav_fault_estimator.estimation.calibration_check import check_calibration
 from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
 from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
@@ -59,6 +58,7 @@ from uav_fault_estimator.recording.project_bag import (
     project_typestore,
     sensor_flight_from_recording,
 )
+from uav_fault_estimator.reporting.calibration_output import write_calibration
 
 INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
 

@@ -1,2 +1,1 @@
-"""Running the main job's chain: offline without ROS, through the node graph (the demo), and
-the calibration commands' output."""
+"""Running the main job's chain: offline without ROS and through the node graph (the demo)."""

@@ -1,0 +1,38 @@
+"""flight_logs.screening_run called as a package function, on the shipped example flight:
+asked for no output file, calibrate_from_logs returns the calibration and writes nothing
+(scripts/screen_logs.py's tests run the commands, which always write)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from helpers.repo import REPO_ROOT
+from uav_aircraft.vehicles import load_vehicle
+from uav_fault_estimator.campaigns.campaign import CampaignOptions
+from uav_fault_estimator.detection.calibration import DEFAULT_WINDOW
+from uav_fault_estimator.detection.generators import SURFACE_GENERATORS
+from uav_fault_estimator.flight_logs.screening_run import CalibrationRequest, calibrate_from_logs
+
+EXAMPLE = REPO_ROOT / "examples" / "flights"
+AIRFRAME = load_vehicle("aerosonde").airframe_files["aerosonde_sim"]
+
+
+@pytest.mark.timeout(60)
+def test_calibrate_from_logs_without_an_output_returns_the_calibration_only(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.chdir(tmp_path)
+    calibration = calibrate_from_logs(CalibrationRequest(
+        log_paths=(EXAMPLE,), airframe_path=AIRFRAME, out_path=None, schedule="none",
+        generators=SURFACE_GENERATORS, truth_table_path=None, forgetting_factor=0.99,
+        window_samples=DEFAULT_WINDOW, settle_s=20.0,
+        campaign=CampaignOptions(workers=0, progress=False)))
+    assert calibration.airframe == "aerosonde_sim"
+    assert calibration.channel_names == SURFACE_GENERATORS
+    assert (calibration.forgetting_factor, calibration.window, calibration.settle_s) == (
+        0.99, DEFAULT_WINDOW, 20.0)
+    assert not calibration.scheduled
+    printed = capsys.readouterr().out
+    assert "airspeed schedule: none" in printed and "calibrated on" not in printed
+    assert list(tmp_path.iterdir()) == []
