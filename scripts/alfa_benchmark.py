@@ -97,7 +97,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{PROGRAM}: {error}", file=sys.stderr)
         return 2
     except OSError as error:
-        print(f"{PROGRAM}: cannot write {arguments.json}: {error.strerror}", file=sys.stderr)
+        print(f"{PROGRAM}: cannot write {error.filename}: {error.strerror}", file=sys.stderr)
         return 2
     return 0
 
