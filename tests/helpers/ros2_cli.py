@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -13,11 +15,29 @@ CONCURRENT_COMMANDS = 3
 # --spin-time of param_set and param_get: the longest the command may look for a live node
 # (it goes on as soon as it finds it); its 2 s default is too short on two loaded cores.
 FIND_NODE_S = "30"
+STACKS_WAIT_S = 10.0  # for a command stuck past its timeout to print its stacks [s]
 
 
 def run_cli(*args: str, timeout_s: float = 60) -> subprocess.CompletedProcess:
-    """`ros2 ARGS...` to its end; its status, stdout and stderr (text)."""
-    return subprocess.run(["ros2", *args], capture_output=True, text=True, timeout=timeout_s)
+    """`ros2 ARGS...` to its end; its status, stdout and stderr (text). A command still
+    running after timeout_s fails the test with every thread's Python stack (SIGABRT under
+    PYTHONFAULTHANDLER), so that a rare hang says where it was."""
+    argv = ["ros2", *args]
+    environment = {**os.environ, "PYTHONFAULTHANDLER": "1"}
+    with subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          env=environment) as process:
+        try:
+            stdout, stderr = process.communicate(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            process.send_signal(signal.SIGABRT)
+            try:
+                _, stacks = process.communicate(timeout=STACKS_WAIT_S)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                _, stacks = process.communicate()
+            raise AssertionError(f"{' '.join(argv)} still running after {timeout_s:g} s; "
+                                 f"its stacks:\n{stacks}") from None
+    return subprocess.CompletedProcess(argv, process.returncode, stdout, stderr)
 
 
 def run_cli_all(*commands: Sequence[str],
