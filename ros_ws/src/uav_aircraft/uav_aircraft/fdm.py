@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import functools
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import jsbsim
@@ -87,6 +87,18 @@ def set_stuck_positions(fdm: jsbsim.FGFDMExec, positions: Mapping[str, float]) -
         if name not in STUCK_SURFACE_FAULT_NAMES:
             raise ValueError(f"{name} is no stuck surface ({', '.join(STUCK_SURFACE_FAULT_NAMES)})")
         fdm[STUCK_POSITION_PROPERTY.format(name=name)] = position
+
+
+def property_nodes(fdm: jsbsim.FGFDMExec, names: Sequence[str]) -> list[jsbsim.FGPropertyNode]:
+    """The JSBSim nodes of existing properties, for a loop that reads or writes them often:
+    node.set_double_value skips the path lookup that fdm[name] = value makes each time
+    (0.05 us a write instead of 0.47); the value read or written is the same double."""
+    manager = fdm.get_property_manager()
+    nodes = [manager.get_node(name) for name in names]
+    missing = [name for name, node in zip(names, nodes, strict=True) if node is None]
+    if missing:
+        raise KeyError(f"no JSBSim properties {', '.join(missing)}")
+    return nodes
 
 
 @functools.cache

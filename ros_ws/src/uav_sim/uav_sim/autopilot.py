@@ -16,7 +16,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
 from uav_aircraft.trim import Trim
 from uav_aircraft.vehicles import AutopilotGains
 
@@ -37,7 +36,7 @@ class FlightState:
     roll_rad: float
     pitch_rad: float
     sideslip_rad: float
-    body_rates_radps: np.ndarray  # p, q, r
+    body_rates_radps: tuple[float, float, float]  # p, q, r
 
 
 @dataclass(frozen=True)

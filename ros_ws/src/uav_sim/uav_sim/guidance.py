@@ -41,6 +41,13 @@ class WaypointGuidance:
         # (0: on it; the MPC guidance turns onto the next leg a turn radius ahead)
         self.switch_ahead_m = switch_ahead_m
         self.leg = 0
+        # each leg's unit direction, computed once (leg_errors runs at the control rate)
+        self.directions = []
+        for leg in range(len(self.waypoints)):
+            self.leg = leg
+            start, end = self.leg_points()
+            self.directions.append((end - start) / np.linalg.norm(end - start))
+        self.leg = 0
 
     def leg_points(self) -> tuple[np.ndarray, np.ndarray]:
         """The current leg's start and end waypoints (north, east) [m]."""
@@ -64,11 +71,11 @@ class WaypointGuidance:
         at position_ne_m, after moving to the next leg when the aircraft has come within
         switch_ahead_m of the line through the current leg's end normal to it."""
         start, end = self.leg_points()
-        direction = (end - start) / np.linalg.norm(end - start)
+        direction = self.directions[self.leg]
         if np.dot(position_ne_m - end, direction) >= -self.switch_ahead_m:
             self.leg = (self.leg + 1) % len(self.waypoints)
             start, end = self.leg_points()
-            direction = (end - start) / np.linalg.norm(end - start)
+            direction = self.directions[self.leg]
         offset = position_ne_m - start
         return (float(direction[0] * offset[1] - direction[1] * offset[0]),
                 math.atan2(direction[1], direction[0]))

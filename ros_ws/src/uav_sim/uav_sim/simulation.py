@@ -19,6 +19,7 @@ from uav_aircraft.fdm import (
     M_PER_FT,
     THROTTLE_OUTPUT,
     create_fdm,
+    property_nodes,
     set_faults,
     set_stuck_positions,
 )
@@ -42,8 +43,8 @@ from uav_sim.sensors import SensorModel
 from uav_sim.wind import (
     FROM_WIND,
     FilteredWind,
+    GustProperties,
     background_wind_ned_mps,
-    set_gusts,
     start_wind,
     total_wind_ned_mps,
     von_karman_turbulence,
@@ -54,6 +55,15 @@ CONTROL_STEPS = 4  # autopilot and the from_wind gusts at 120 Hz: every 4th JSBS
 # another's (flying without air data leaves the turbulence and state noise as they were).
 TURBULENCE_STREAM, STATE_SENSOR_STREAM, AIR_DATA_SENSOR_STREAM = 1, 2, 3
 ENGINE_SPIN_UP_S = 3.0
+# What the control loop reads and writes at 120 Hz, in _control's order (nodes found once).
+CONTROL_READS = (
+    "position/h-sl-meters", "velocities/v-down-fps", "velocities/vt-fps", "attitude/phi-rad",
+    "attitude/theta-rad", "aero/beta-rad", "velocities/p-rad_sec", "velocities/q-rad_sec",
+    "velocities/r-rad_sec", "velocities/v-north-fps", "velocities/v-east-fps",
+    "position/lat-geod-rad", "position/long-gc-rad",
+)
+CONTROL_WRITES = ("fcs/elevator-cmd-norm", "fcs/aileron-cmd-norm", "fcs/rudder-cmd-norm",
+                  "fcs/throttle-cmd-norm")
 STATE_INTEGRATORS = tuple(
     f"simulation/integrator/{kind}/{motion}"
     for kind in ("rate", "position")
@@ -117,6 +127,10 @@ class Simulation:
         set_stuck_positions(self.fdm, {fault.name: fault.position for fault in scenario.faults
                                        if fault.name in STUCK_SURFACE_FAULT_NAMES})
         self.trim = self._start()
+        self._reads = [node.get_double_value for node in property_nodes(self.fdm, CONTROL_READS)]
+        self._writes = [node.set_double_value
+                        for node in property_nodes(self.fdm, CONTROL_WRITES)]
+        self._gusts = GustProperties(self.fdm)
         # North-east origin: where the flight starts. The engine spin-up held the aircraft
         # fixed in inertial space while the earth turned (about 250 m east per second at 55 N).
         self.origin_rad = (self.fdm["position/lat-geod-rad"], self.fdm["position/long-gc-rad"])
@@ -196,7 +210,7 @@ class Simulation:
                     set_faults(fdm, faults_pct)
                     self._faults_set = faults_pct
                 if self.turbulence is not None:
-                    set_gusts(fdm, *self.turbulence.step())
+                    self._gusts.set(*self.turbulence.step())
                 self._control(CONTROL_STEPS * JSBSIM_DT_S)
             fdm.run()
         self.sample_count += 1
@@ -204,25 +218,21 @@ class Simulation:
         return self._latest
 
     def _control(self, dt_s: float) -> None:
-        fdm = self.fdm
+        (altitude_m, down_fps, airspeed_fps, roll_rad, pitch_rad, sideslip_rad, p_radps, q_radps,
+         r_radps, north_fps, east_fps, latitude_rad, longitude_rad) = [
+            read() for read in self._reads]
         state = FlightState(
-            altitude_m=fdm["position/h-sl-meters"],
-            climb_rate_mps=-fdm["velocities/v-down-fps"] * M_PER_FT,
-            airspeed_mps=fdm["velocities/vt-fps"] * M_PER_FT,
-            roll_rad=fdm["attitude/phi-rad"],
-            pitch_rad=fdm["attitude/theta-rad"],
-            sideslip_rad=fdm["aero/beta-rad"],
-            body_rates_radps=np.array(
-                [
-                    fdm["velocities/p-rad_sec"],
-                    fdm["velocities/q-rad_sec"],
-                    fdm["velocities/r-rad_sec"],
-                ]
-            ),
+            altitude_m=altitude_m,
+            climb_rate_mps=-down_fps * M_PER_FT,
+            airspeed_mps=airspeed_fps * M_PER_FT,
+            roll_rad=roll_rad,
+            pitch_rad=pitch_rad,
+            sideslip_rad=sideslip_rad,
+            body_rates_radps=(p_radps, q_radps, r_radps),
         )
         roll_cmd_rad = self.guidance.roll_command(
-            self._position_ne_m(),
-            np.array([fdm["velocities/v-north-fps"], fdm["velocities/v-east-fps"]]) * M_PER_FT,
+            north_east_m(latitude_rad, longitude_rad, self.origin_rad),
+            np.array([north_fps, east_fps]) * M_PER_FT,
             dt_s,
         )
         self.autopilot.airspeed_cmd_mps, self.autopilot.altitude_cmd_m = (
@@ -230,10 +240,11 @@ class Simulation:
         commands = self.autopilot.update(state, roll_cmd_rad, dt_s)
         self._setpoints = np.array([commands.roll_cmd_rad, commands.pitch_cmd_rad, math.nan])
         limit = self.vehicle.surface_limit_rad
-        fdm["fcs/elevator-cmd-norm"] = commands.elevator_rad / limit
-        fdm["fcs/aileron-cmd-norm"] = commands.aileron_rad / limit
-        fdm["fcs/rudder-cmd-norm"] = commands.rudder_rad / limit
-        fdm["fcs/throttle-cmd-norm"] = commands.throttle
+        set_elevator, set_aileron, set_rudder, set_throttle = self._writes
+        set_elevator(commands.elevator_rad / limit)
+        set_aileron(commands.aileron_rad / limit)
+        set_rudder(commands.rudder_rad / limit)
+        set_throttle(commands.throttle)
 
     def _position_ne_m(self) -> np.ndarray:
         return north_east_m(

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import jsbsim
 import numpy as np
-from uav_aircraft.fdm import M_PER_FT
+from uav_aircraft.fdm import M_PER_FT, property_nodes
 from uav_common.filters import LowPass
 
 from uav_sim.scenario import Wind
@@ -77,13 +77,20 @@ def von_karman_turbulence(fdm: jsbsim.FGFDMExec, wind: Wind, airspeed_mps: float
         period_s, rng)
 
 
-def set_gusts(fdm: jsbsim.FGFDMExec, velocity_ned_mps: np.ndarray,
-              body_rates_radps: np.ndarray) -> None:
-    """Gust velocities (NED) and body-axis gust rates for the following JSBSim steps."""
-    for name, value in zip(GUST_VELOCITY_FPS, velocity_ned_mps / M_PER_FT, strict=True):
-        fdm[name] = float(value)
-    for name, value in zip(GUST_RATE_RADPS, body_rates_radps, strict=True):
-        fdm[name] = float(value)
+class GustProperties:
+    """The aircraft's gust properties, written at the control rate (nodes found once)."""
+
+    def __init__(self, fdm: jsbsim.FGFDMExec) -> None:
+        self.velocity_nodes = property_nodes(fdm, GUST_VELOCITY_FPS)
+        self.rate_nodes = property_nodes(fdm, GUST_RATE_RADPS)
+
+    def set(self, velocity_ned_mps: np.ndarray, body_rates_radps: np.ndarray) -> None:
+        """Gust velocities (NED) [m/s] and body-axis gust rates [rad/s] for the following
+        JSBSim steps."""
+        for node, value in zip(self.velocity_nodes, velocity_ned_mps / M_PER_FT, strict=True):
+            node.set_double_value(float(value))
+        for node, value in zip(self.rate_nodes, body_rates_radps, strict=True):
+            node.set_double_value(float(value))
 
 
 def total_wind_ned_mps(fdm: jsbsim.FGFDMExec) -> np.ndarray:

@@ -27,7 +27,7 @@ wind the air-relative and ground velocities change alike; the filtered wind's ow
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import jsbsim
 import numpy as np
@@ -41,6 +41,7 @@ from uav_aircraft.fdm import (
     M_PER_FT,
     apply_propeller_model,
     create_fdm,
+    property_nodes,
     set_faults,
 )
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
@@ -83,6 +84,19 @@ _POSITION_AND_ATTITUDE = {
 }
 
 
+def _setters(fdm: jsbsim.FGFDMExec, names: Sequence[str]) -> list[Callable[[float], None]]:
+    """A setter of each named property, in the names' order."""
+    return [node.set_double_value for node in property_nodes(fdm, names)]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two 3-vectors: np.cross's products and differences in its order (the same
+    bits) without its handling of general shapes (about 10 us a call)."""
+    a0, a1, a2 = a
+    b0, b1, b2 = b
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 class AircraftPredictor:
     """phi(x | f) for one fixed fault vector f: a JSBSim copy of the vehicle of its own, the
     shipped one or as `aircraft` says the flown one differs."""
@@ -99,6 +113,13 @@ class AircraftPredictor:
         self.fdm: jsbsim.FGFDMExec = create_fdm(vehicle, aircraft=aircraft)
         self.fdm[JSBSIM_ENGINE_ON] = 0
         set_faults(self.fdm, self.faults_pct)
+        # the initial-condition and command properties each call writes (nodes found once)
+        self.set_position_and_attitude = _setters(
+            self.fdm, [name for name, _ in _POSITION_AND_ATTITUDE.values()])
+        self.set_commands = _setters(self.fdm, [name for name, _ in self.commands.values()])
+        self.set_air_velocity = _setters(self.fdm, [f"ic/{axis}-fps" for axis in "uvw"])
+        self.set_body_rates = _setters(self.fdm, [f"ic/{axis}-rad_sec" for axis in "pqr"])
+        (self.set_fuel,) = _setters(self.fdm, [FUEL_LOADED_LBS])
 
     def __call__(
         self, state: np.ndarray, controls: np.ndarray, wind_ned_mps: np.ndarray
@@ -112,18 +133,21 @@ class AircraftPredictor:
         to_body = ned_to_body(*state[[_STATE["roll"], _STATE["pitch"], _STATE["yaw"]]])
         air_velocity_body_mps = to_body @ (state[_VELOCITY_NED] - wind_ned_mps)
         body_rates_radps = state[_BODY_RATES]
-        for channel, (name, unit) in _POSITION_AND_ATTITUDE.items():
-            fdm[name] = float(state[_STATE[channel]]) / unit
-        for axis, value_mps in zip("uvw", air_velocity_body_mps, strict=True):
-            fdm[f"ic/{axis}-fps"] = float(value_mps) / M_PER_FT
-        for axis, value_radps in zip("pqr", body_rates_radps, strict=True):
-            fdm[f"ic/{axis}-rad_sec"] = float(value_radps)
-        for channel, (name, unit) in self.commands.items():
+        for set_value, (channel, (_, unit)) in zip(
+                self.set_position_and_attitude, _POSITION_AND_ATTITUDE.items(), strict=True):
+            set_value(float(state[_STATE[channel]]) / unit)
+        for set_value, value_mps in zip(self.set_air_velocity, air_velocity_body_mps,
+                                        strict=True):
+            set_value(float(value_mps) / M_PER_FT)
+        for set_value, value_radps in zip(self.set_body_rates, body_rates_radps, strict=True):
+            set_value(float(value_radps))
+        for set_value, (channel, (_, unit)) in zip(self.set_commands, self.commands.items(),
+                                                   strict=True):
             command = float(controls[_CONTROL[channel]]) / unit
             # The flap's FCS takes commands 0..1 only (below 0 JSBSim's aerosurface_scale
             # gives NaN); sensor noise makes a retracted flap read a little below 0.
-            fdm[name] = max(command, 0.0) if channel == "flap" else command
-        fdm[FUEL_LOADED_LBS] = float(state[_STATE["fuel_mass"]]) / KG_PER_LB
+            set_value(max(command, 0.0) if channel == "flap" else command)
+        self.set_fuel(float(state[_STATE["fuel_mass"]]) / KG_PER_LB)
         fdm.run_ic()
         density_kg_m3 = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
         propeller_forces = self.propeller.forces(
@@ -136,7 +160,7 @@ class AircraftPredictor:
         apply_propeller_model(fdm, propeller_forces)
         fdm.run_ic()
         derivatives = np.array([fdm[name] for name in BODY_ACCELERATIONS])
-        velocity_rate_body = derivatives[:3] * M_PER_FT + np.cross(
+        velocity_rate_body = derivatives[:3] * M_PER_FT + _cross(
             body_rates_radps, air_velocity_body_mps
         )
         return np.concatenate([to_body.T @ velocity_rate_body, derivatives[3:]])
