@@ -19,7 +19,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy
 import yaml
 
 DEFAULT_TRUNCATE_LENGTH = 128  # ros2topic echo's default; --full-length lifts it
@@ -71,6 +70,8 @@ def to_plain(
 ) -> Any:
     """A message, array or scalar as plain data, fields in declaration order, truncated and
     abbreviated as rosidl_runtime_py's message_to_ordereddict does for ros2 topic echo."""
+    import numpy  # here, not at the top: `ros2 run` and the graph verbs never need it
+
     options = {"truncate_length": truncate_length, "no_arr": no_arr, "no_str": no_str}
     if is_message(value):
         names = value.get_fields_and_field_types()
@@ -134,6 +135,8 @@ def format_csv(
     as rosidl_runtime_py's message_to_csv prints it for ros2 topic echo --csv: an array
     cut after truncate_length elements with `...`, a string or bytes after truncate_length
     characters with `...` appended."""
+    import numpy
+
     options = {"truncate_length": truncate_length, "no_arr": no_arr, "no_str": no_str}
     if is_message(value):
         names = value.get_fields_and_field_types()
@@ -168,6 +171,7 @@ def message_class(type_name: str) -> type:
 def set_message_fields(message: Any, values: dict, now: Callable[[], Any]) -> None:
     """Fill a message from a YAML mapping like rosidl_runtime_py.set_message_fields, with
     `header: auto` (stamp now, frame_id '') and `stamp: now` (a builtin Time) expanded."""
+    import numpy
     from rosidl_parser import definition
 
     if not isinstance(values, dict):
