@@ -18,7 +18,6 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 
 def laplacian_glrt(samples: np.ndarray) -> float:
@@ -65,6 +64,10 @@ def weibull_fit(samples: np.ndarray) -> Weibull:
     x = x[np.isfinite(x) & (x > 0.0)]
     if x.size < 10:
         raise ValueError(f"a Weibull fit needs at least 10 positive samples, got {x.size}")
+    # imported here: scipy.stats costs 0.7 s at import, and detector_node, which reads a
+    # calibration and never fits one, would pay it at every start
+    from scipy import stats
+
     shape, _, scale = stats.weibull_min.fit(x, floc=0.0)
     return Weibull(scale=float(scale), shape=float(shape))
 
