@@ -32,7 +32,7 @@ def imported(package: str) -> set[str]:
 
 @pytest.mark.timeout(30)
 @pytest.mark.parametrize("package", ["uav_common", "uav_aircraft", "uav_sim",
-                                     "uav_fault_estimator", "ros2cli_lite"])
+                                     "uav_fault_estimator", "uav_mavlink", "ros2cli_lite"])
 def test_every_import_is_a_declared_dependency(package):
     manifest = (SOURCE / package / "package.xml").read_text()
     root = ElementTree.fromstring(manifest)

@@ -1,0 +1,1 @@
+"""An autopilot's MAVLink link as the project's streams."""
