@@ -50,6 +50,7 @@ cannot tell which is wrong). Elevons and other true mixes of two surfaces are no
 
 from __future__ import annotations
 
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -73,6 +74,9 @@ PWM_RANGE_US = (500.0, 2500.0)
 MAX_DEFLECTION_RAD = np.pi / 2
 REQUIRED_CONTROLS = ("aileron", "elevator")  # the detector's generators (self_tuning)
 THROTTLE = "throttle"
+# Sources a vote needs: the surface's own output and two copies (a median of two is their
+# mean, which a pinned output would halve).
+VOTING_SOURCES = 3
 
 
 class AirframeError(ValueError):
@@ -205,3 +209,39 @@ def load_airframe(path: str | Path) -> Airframe:
                          if "airspeed_source" in reader.data else None),
         path=path,
     )
+
+
+def intended_raw(airframe: Airframe, control: OutputMap, raw_of: Callable[[int], np.ndarray],
+                 present: Collection[int]) -> np.ndarray:
+    """The control's command (n,) in raw output units: its own output, or with at least
+    VOTING_SOURCES - 1 copies among the present outputs (mixed) the median of its output and
+    each copy's implied original, zero + (copy - zero) / factor (NaN-aware, per sample).
+    raw_of(output) gives an output's raw values (n,); present: the outputs the source
+    carries (1-based)."""
+    own = raw_of(control.output)
+    copies = [mixed for mixed in airframe.mixed
+              if mixed.of_output == control.output and mixed.output in present]
+    if 1 + len(copies) < VOTING_SOURCES:
+        return own
+    implied = [control.zero + (raw_of(mixed.output) - control.zero) / mixed.factor
+               for mixed in copies]
+    sources = np.column_stack([own, *implied])
+    voted = np.full(own.shape, np.nan)
+    known = np.isfinite(sources).any(axis=1)
+    voted[known] = np.nanmedian(sources[known], axis=1)
+    return voted
+
+
+def control_values(airframe: Airframe, raw_of: Callable[[int], np.ndarray],
+                   present: Collection[int], count: int) -> np.ndarray:
+    """(count, len(CONTROLS)): aileron, elevator, rudder [rad] and throttle [0..1] through
+    the airframe's maps (each control's intended_raw, raw_of and present as there); NaN for
+    a control the airframe does not give; the throttle clipped to 0..1 (NaN stays NaN)."""
+    values = np.full((count, len(CONTROLS)), np.nan)
+    for index, name in enumerate(CONTROLS):
+        if name in airframe.controls:
+            control = airframe.controls[name]
+            values[:, index] = control.value(intended_raw(airframe, control, raw_of, present))
+    throttle = CONTROLS.index(THROTTLE)
+    values[:, throttle] = np.clip(values[:, throttle], 0.0, 1.0)
+    return values

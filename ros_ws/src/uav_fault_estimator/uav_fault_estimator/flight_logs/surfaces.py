@@ -4,7 +4,7 @@ outputs' map to deflections, the vote of a surface's copies, and the copies' che
 from __future__ import annotations
 
 import numpy as np
-from uav_aircraft.airframe import CONTROLS, THROTTLE, Airframe, OutputMap
+from uav_aircraft.airframe import CONTROLS, MAX_OUTPUTS, Airframe, control_values
 
 from uav_fault_estimator.flight_logs.streams import (
     OUTPUTS,
@@ -42,43 +42,16 @@ def _raw(outputs: TimedSeries, output: int, log: FlightLog, airframe: Airframe) 
     return outputs.values[:, outputs.columns.index(column)]
 
 
-# Sources a vote needs: the surface's own output and two copies (a median of two is their
-# mean, which a pinned output would halve).
-VOTING_SOURCES = 3
-
-
-def intended_raw(outputs: TimedSeries, control: OutputMap, log: FlightLog,
-                 airframe: Airframe) -> np.ndarray:
-    """The control's command (n,) in raw output units: its own output, or with at least
-    VOTING_SOURCES - 1 copies in the log (mixed) the median of its output and each copy's
-    implied original, zero + (copy - zero) / factor (NaN-aware, per sample)."""
-    own = _raw(outputs, control.output, log, airframe)
-    copies = [mixed for mixed in airframe.mixed if mixed.of_output == control.output
-              and output_column(mixed.output) in outputs.columns]
-    if 1 + len(copies) < VOTING_SOURCES:
-        return own
-    implied = [control.zero + (_raw(outputs, mixed.output, log, airframe) - control.zero)
-               / mixed.factor for mixed in copies]
-    sources = np.column_stack([own, *implied])
-    voted = np.full(own.shape, np.nan)
-    known = np.isfinite(sources).any(axis=1)
-    voted[known] = np.nanmedian(sources[known], axis=1)
-    return voted
-
-
 def surface_deflections(log: FlightLog, airframe: Airframe) -> TimedSeries:
     """The SURFACES stream (aileron, elevator, rudder [rad], throttle [0..1]) at the OUTPUTS
-    stream's instants, through the airframe's maps (each control's intended_raw); NaN for a
-    control the airframe does not give. ValueError (one line) for a log without outputs,
-    with outputs of another unit, or without an output the airframe maps."""
+    stream's instants, through the airframe's maps and votes (airframe.control_values); NaN
+    for a control the airframe does not give. ValueError (one line) for a log without
+    outputs, with outputs of another unit, or without an output the airframe maps."""
     outputs = _outputs(log, airframe)
-    values = np.full((outputs.times_s.size, len(CONTROLS)), np.nan)
-    for index, name in enumerate(CONTROLS):
-        if name in airframe.controls:
-            control = airframe.controls[name]
-            values[:, index] = control.value(intended_raw(outputs, control, log, airframe))
-    throttle = CONTROLS.index(THROTTLE)
-    values[:, throttle] = np.clip(values[:, throttle], 0.0, 1.0)  # NaN stays NaN
+    present = {output for output in range(1, MAX_OUTPUTS + 1)
+               if output_column(output) in outputs.columns}
+    values = control_values(airframe, lambda output: _raw(outputs, output, log, airframe),
+                            present, outputs.times_s.size)
     return TimedSeries(outputs.times_s, values, CONTROLS)
 
 
