@@ -66,6 +66,7 @@ NODES = (
         ("detector_node", "docs/detector.md"), ("standard_topics_node", "docs/ros_interface.md"),
         ("recorder_node", "docs/ros_interface.md"), ("foxglove_node", "docs/ros_interface.md"),
         ("log_replay_node", "docs/flight_logs.md"))),
+    NodeParameters("mavlink_node", "uav_mavlink.ros.mavlink_node", "docs/onboard.md"),
 )
 
 

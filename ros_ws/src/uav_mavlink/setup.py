@@ -11,6 +11,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/config", ["config/mavlink_node.yaml"]),
     ],
     install_requires=["setuptools"],
     zip_safe=True,
@@ -18,4 +19,5 @@ setup(
     maintainer_email="maintainers@uav-fault-diagnostics.example.org",
     description="An autopilot's MAVLink link as the project's streams.",
     license="Apache-2.0",
+    entry_points={"console_scripts": ["mavlink_node = uav_mavlink.ros.mavlink_node:main"]},
 )

@@ -32,7 +32,7 @@ PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
             "mhe_node": "uav_fault_estimator", "detector_node": "uav_fault_estimator",
             "standard_topics_node": "uav_fault_estimator",
             "recorder_node": "uav_fault_estimator", "foxglove_node": "uav_fault_estimator",
-            "log_replay_node": "uav_fault_estimator"}
+            "log_replay_node": "uav_fault_estimator", "mavlink_node": "uav_mavlink"}
 # Each aircraft's nodes in start order: the simulator last, once the others listen.
 VEHICLE_NODES = ("residual_node", "mhe_node", "detector_node", "standard_topics_node",
                  SIMULATOR)

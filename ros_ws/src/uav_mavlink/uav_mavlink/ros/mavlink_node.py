@@ -1,0 +1,294 @@
+"""mavlink_node: an autopilot's MAVLink link (ArduPlane, PX4) as the project's streams.
+
+Listens on `connection` (pymavlink's form: `udpin:127.0.0.1:14550`, `/dev/ttyACM0,921600`,
+`tcp:HOST:PORT`) to the autopilot of `target_system` (0: the first one heard), samples what it
+streams onto a grid of its boot time (uav_mavlink.sample_assembly) and publishes, stamped with
+the autopilot's boot time mapped once to ROS time (again after a reboot), as sim_node does
+(relative names, the `qos` chosen): `state` (AircraftState: ATTITUDE, GLOBAL_POSITION_INT or
+LOCAL_POSITION_NED, RPM; the fuel mass the parameter), `controls` (ControlInputs: SERVO_OUTPUT_RAW
+through the airframe file's servo mapping; flap 0, mixture and ignition 1), `air_data`
+(AirData: VFR_HUD's airspeed, the vanes' angles NaN), `wind/filtered` (WindEstimate: the
+autopilot's wind estimate, WIND or WIND_COV, through the paper's filter), `autopilot_setpoints`
+(NAV_CONTROLLER_OUTPUT's commanded roll and pitch), `/clock` when `publish_clock`, and
+`/diagnostics` (the link, each message type's rate, the streams missing). Sends only its own
+heartbeat (uav_mavlink.link: read-only to the aircraft).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections import Counter
+from typing import Any
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from rclpy.clock import Clock as RosClock
+from rclpy.clock import ClockType
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from uav_aircraft.airframe import CONTROLS, MAX_OUTPUTS, control_values, load_airframe
+from uav_aircraft.vehicle_parameter import VEHICLE_PARAMETER
+from uav_aircraft.vehicles import load_vehicle
+from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS
+from uav_common.filters import LowPass
+from uav_common.ros.diagnostics import OK, WARN, Diagnostics
+from uav_common.ros.messages import (
+    air_data_message,
+    controls_message,
+    setpoints_message,
+    state_message,
+    wind_message,
+)
+from uav_common.ros.node_life import run_node
+from uav_common.ros.parameters import QOS_PARAMETER, ParameterSpec, declare_parameters
+from uav_common.ros.qos import CLOCK_QOS, STREAM_QOS_PROFILES
+from uav_fault_msgs.msg import (
+    AircraftState,
+    AirData,
+    AutopilotSetpoints,
+    ControlInputs,
+    WindEstimate,
+)
+
+from uav_mavlink.autopilot_messages import (
+    AIRSPEED,
+    ATTITUDE,
+    ENGINE,
+    OUTPUTS,
+    POSITION,
+    SETPOINTS,
+    VELOCITY,
+    WIND,
+    read_message,
+)
+from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
+from uav_mavlink.sample_assembly import Sample, SampleAssembly
+
+PARAMETERS = {
+    "connection": ParameterSpec(
+        "the autopilot's link as pymavlink takes it: udpin:HOST:PORT (listen), udpout:, "
+        "tcp:HOST:PORT, or a serial port DEVICE,BAUD", "udpin:127.0.0.1:14550"),
+    "target_system": ParameterSpec("the autopilot's MAVLink system id; 0: the first "
+                                   "autopilot heard", 0, 0, 255),
+    "source_system": ParameterSpec("the system id this node sends its heartbeat as (the "
+                                   "vehicle's, as an onboard computer)", 1, 1, 255),
+    "vehicle": VEHICLE_PARAMETER,
+    "airframe": ParameterSpec("airframe YAML mapping the autopilot's servo outputs to surfaces "
+                              "(docs/flight_logs.md); empty: the vehicle's one airframe file",
+                              ""),
+    "sample_period_s": ParameterSpec("period of the grid the streams are sampled onto, on the "
+                                     "autopilot's clock [s]", 0.05, 0.01, 1.0),
+    "attitude_max_age_s": ParameterSpec(
+        "the longest ATTITUDE is held before the state's attitude and rates are missing [s]",
+        0.2, 0.01, 10.0),
+    "position_max_age_s": ParameterSpec(
+        "the longest the position and velocity messages are held [s]", 0.5, 0.01, 10.0),
+    "outputs_max_age_s": ParameterSpec(
+        "the longest SERVO_OUTPUT_RAW is held before the controls are missing [s]", 0.5,
+        0.01, 10.0),
+    "air_data_max_age_s": ParameterSpec(
+        "the longest VFR_HUD's airspeed is held [s]", 1.0, 0.01, 10.0),
+    "slow_max_age_s": ParameterSpec(
+        "the longest the wind, setpoints and engine speed are held [s]", 3.0, 0.1, 60.0),
+    "fuel_mass_kg": ParameterSpec("the fuel on board, which no autopilot streams (0 for an "
+                                  "electric aircraft) [kg]", 0.0, 0.0, 1000.0),
+    "pitch_trim_deg": ParameterSpec(
+        "added to ATTITUDE's pitch: ArduPlane subtracts its pitch trim parameter from the "
+        "pitch it sends (PTCH_TRIM_DEG; 0 for PX4) [deg]", 0.0, -45.0, 45.0),
+    "wind_filter_tau_s": ParameterSpec(
+        "time constant of the filter the autopilot's wind estimate goes through (embedded-"
+        "estimation paper eq. 4; the scenarios' 10 s) [s]", 10.0, 0.1, 1000.0),
+    "publish_clock": ParameterSpec("publish the autopilot's time, mapped to ROS time, on "
+                                   "/clock (for nodes run with use_sim_time)", False),
+    "qos": QOS_PARAMETER,
+}
+NS_PER_S = 1_000_000_000
+READ_PERIOD_S = 0.005  # how often the link is read [s, wall time]
+HEARTBEAT_PERIOD_S = 1.0  # the onboard computer's heartbeat [s, wall time]
+HEARTBEAT_LOST_S = 3.0  # no autopilot heartbeat for this long: the link is lost [s]
+_WALL = RosClock(clock_type=ClockType.STEADY_TIME)
+
+
+class MavlinkNode(Node):
+    """Thin adapter: parameters in, link messages to readings to grid samples (cores), samples
+    to messages, diagnostics."""
+
+    def __init__(self) -> None:
+        super().__init__("mavlink_node")
+        self.parameters = declare_parameters(self, PARAMETERS)
+        p = self.parameters
+        self.airframe = load_airframe(p["airframe"] or self._vehicle_airframe(p["vehicle"]))
+        self.assembly = SampleAssembly(p["sample_period_s"], {
+            ATTITUDE: p["attitude_max_age_s"], POSITION: p["position_max_age_s"],
+            VELOCITY: p["position_max_age_s"], AIRSPEED: p["air_data_max_age_s"],
+            OUTPUTS: p["outputs_max_age_s"], SETPOINTS: p["slow_max_age_s"],
+            WIND: p["slow_max_age_s"], ENGINE: p["slow_max_age_s"]},
+            p["fuel_mass_kg"], math.radians(p["pitch_trim_deg"]))
+        self.wind_filter = LowPass(p["wind_filter_tau_s"])
+        self.link = open_link(p["connection"], p["source_system"])
+        qos = STREAM_QOS_PROFILES[p["qos"]]
+        self.publishers_ = {
+            "state": self.create_publisher(AircraftState, "state", qos),
+            "controls": self.create_publisher(ControlInputs, "controls", qos),
+            "air_data": self.create_publisher(AirData, "air_data", qos),
+            "wind": self.create_publisher(WindEstimate, "wind/filtered", qos),
+            "setpoints": self.create_publisher(AutopilotSetpoints, "autopilot_setpoints", qos),
+        }
+        self.clock_publisher = (self.create_publisher(Clock, "/clock", CLOCK_QOS)
+                                if p["publish_clock"] else None)
+        self.target_system = p["target_system"]
+        self.autopilot = ""  # ArduPilot or PX4, once heard
+        self.heartbeat_s: float | None = None  # wall time of its last heartbeat [s]
+        # ROS time minus the autopilot's boot time [ns]: integers, as a float of seconds
+        # since 1970 resolves only 0.24 us
+        self.offset_ns: int | None = None
+        self.last_sample: Sample | None = None
+        self.received: Counter[str] = Counter()  # message types since the last report
+        self.reported_s = time.monotonic()
+        self.counts = Counter()  # samples, reboots, bad packets, readings out of order
+        self.diagnostics = Diagnostics(self, silent_after_s=None,
+                                       before_publish=self.report)
+        self.create_timer(READ_PERIOD_S, self.read_link, clock=_WALL)
+        self.reopen_s = 0.0  # wall time of the last attempt to open a failed link [s]
+        self.create_timer(HEARTBEAT_PERIOD_S, self.send_heartbeat, clock=_WALL)
+        self.get_logger().info(
+            f"listening on {p['connection']} for "
+            f"{'the first autopilot' if not self.target_system else f'system {self.target_system}'}"
+            f"; servo mapping {self.airframe.path}")
+
+    @staticmethod
+    def _vehicle_airframe(vehicle: str) -> Any:
+        files = load_vehicle(vehicle).airframe_files
+        if len(files) != 1:
+            raise ValueError(f"vehicle {vehicle} has {len(files)} airframe files "
+                             f"({', '.join(files) or 'none'}): name one with -p airframe:=FILE")
+        return next(iter(files.values()))
+
+    def read_link(self) -> None:
+        """Every message waiting on the link, in order. A link that fails (a serial port
+        gone) is said once and opened again every heartbeat period until it works."""
+        try:
+            if self.link is None:
+                self._reopen()
+            while self.link is not None and (message := self.link.recv_msg()) is not None:
+                self.take(message)
+        except OSError as error:
+            self.get_logger().error(f"link {self.parameters['connection']} failed ({error}): "
+                                    "opening it again every second")
+            self.link, self.reopen_s = None, time.monotonic()
+
+    def _reopen(self) -> None:
+        if time.monotonic() - self.reopen_s < HEARTBEAT_PERIOD_S:
+            return
+        self.reopen_s = time.monotonic()
+        self.link = open_link(self.parameters["connection"], self.parameters["source_system"])
+        self.get_logger().info(f"link {self.parameters['connection']} open again")
+
+    def send_heartbeat(self) -> None:
+        if self.link is not None:
+            send_heartbeat(self.link)
+
+    def take(self, message: Any) -> None:
+        kind = message.get_type()
+        if kind == "BAD_DATA":
+            self.counts["bad_packets"] += 1
+            return
+        if is_autopilot_heartbeat(message) and self._is_target(message.get_srcSystem()):
+            self._heard(message)
+            return
+        if not self.target_system or message.get_srcSystem() != self.target_system:
+            return
+        self.received[kind] += 1
+        reading = read_message(message)
+        if reading is None:
+            return
+        assembled = self.assembly.add(reading)
+        if assembled.rebooted:
+            self.get_logger().warning("the autopilot's boot time went back: it rebooted; "
+                                      "its clock is mapped to ROS time again")
+            self.counts["reboots"] += 1
+            self.offset_ns = None
+        for sample in assembled.samples:
+            self.publish(sample)
+
+    def _is_target(self, system: int) -> bool:
+        return not self.target_system or system == self.target_system
+
+    def _heard(self, heartbeat: Any) -> None:
+        if not self.target_system:
+            self.target_system = heartbeat.get_srcSystem()
+        if not self.autopilot:
+            self.autopilot = AUTOPILOTS[heartbeat.autopilot]
+            self.get_logger().info(f"heard {self.autopilot} as system {self.target_system}")
+        self.heartbeat_s = time.monotonic()
+
+    def publish(self, sample: Sample) -> None:
+        """The sample on every stream, stamped with its boot time mapped to ROS time."""
+        boot_ns = round(sample.boot_time_s * NS_PER_S)
+        if self.offset_ns is None:
+            self.offset_ns = self.get_clock().now().nanoseconds - boot_ns
+        seconds, nanoseconds = divmod(boot_ns + self.offset_ns, NS_PER_S)
+        ros_stamp = Time(sec=seconds, nanosec=nanoseconds)
+        controls = np.full(len(CONTROL_CHANNELS), math.nan)
+        mapped = self._controls(sample.outputs_us)
+        for name, value in zip(CONTROLS, mapped, strict=True):
+            controls[CONTROL_CHANNELS.index(name)] = value
+        controls[CONTROL_CHANNELS.index("flap")] = 0.0  # no flap mapped: retracted
+        controls[CONTROL_CHANNELS.index("mixture")] = 1.0
+        controls[CONTROL_CHANNELS.index("ignition")] = 1.0
+        air_data = np.full(len(AIR_DATA_CHANNELS), math.nan)
+        air_data[AIR_DATA_CHANNELS.index("airspeed")] = sample.airspeed_mps
+        wind = self._filtered_wind(sample)
+        messages = {"state": state_message(0.0, sample.state),
+                    "controls": controls_message(0.0, controls),
+                    "air_data": air_data_message(0.0, air_data),
+                    "wind": wind_message(0.0, wind, self.wind_filter.tau_s),
+                    "setpoints": setpoints_message(0.0, sample.setpoints)}
+        for name, message in messages.items():
+            message.header.stamp = ros_stamp
+            self.publishers_[name].publish(message)
+        if self.clock_publisher is not None:
+            self.clock_publisher.publish(Clock(clock=ros_stamp))
+        self.counts["samples"] += 1
+        self.last_sample = sample
+
+    def _controls(self, outputs_us: np.ndarray) -> np.ndarray:
+        """Aileron, elevator, rudder [rad] and throttle through the servo mapping."""
+        return control_values(self.airframe, lambda output: outputs_us[None, output - 1],
+                              range(1, MAX_OUTPUTS + 1), 1)[0]
+
+    def _filtered_wind(self, sample: Sample) -> np.ndarray:
+        """The autopilot's wind through the filter; NaN while it is missing (the filter
+        holds its state and goes on from it when the wind returns)."""
+        if not np.isfinite(sample.wind_ned_mps).all():
+            return np.full(3, math.nan)
+        previous = self.last_sample
+        dt_s = sample.boot_time_s - previous.boot_time_s if previous else 0.0
+        return self.wind_filter.update(sample.wind_ned_mps, dt_s).copy()
+
+    def report(self) -> None:
+        """Diagnostics: the link, each message type's rate, the streams missing."""
+        now_s = time.monotonic()
+        elapsed_s, self.reported_s = now_s - self.reported_s, now_s
+        rates = {f"rate_{kind.lower()}_hz": f"{count / elapsed_s:.1f}"
+                 for kind, count in sorted(self.received.items())}
+        self.received.clear()
+        missing = self.last_sample.missing if self.last_sample else ()
+        values = {"autopilot": self.autopilot or "-", "system": self.target_system,
+                  "missing": ", ".join(missing) or "none", **self.counts, **rates}
+        if self.heartbeat_s is None or now_s - self.heartbeat_s > HEARTBEAT_LOST_S:
+            self.diagnostics.update(WARN, "no autopilot heartbeat", values)
+        elif missing:
+            self.diagnostics.update(WARN, "streams missing: " + ", ".join(missing), values)
+        else:
+            self.diagnostics.update(OK, f"linked to {self.autopilot}", values)
+
+
+def main(args: list[str] | None = None) -> int:
+    return run_node("mavlink_node", MavlinkNode, args=args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
