@@ -144,3 +144,38 @@ def test_an_arduplane_stream_becomes_the_projects_streams(start_process, graph):
     assert all((m.get_srcComponent(), m.type, m.autopilot) == (
         191, mavutil.mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavutil.mavlink.MAV_AUTOPILOT_INVALID)
         for m in sent_to_us)
+
+
+@pytest.mark.timeout(120)
+def test_arduplanes_one_hertz_defaults_are_said_once_with_the_parameter_to_raise(
+        start_process, graph):
+    """The scripted ArduPlane at its default stream rates, 1 Hz a group, but VFR_HUD at 2 Hz
+    (SRn_EXTRA2 raised), for 6 s of wall time; the node judges rates over 1.5 s windows:
+    the three slow messages are said once each, however many windows find them slow."""
+    port = free_udp_port()
+    node = start_process(ros2_run_argv("uav_mavlink", "mavlink_node", ros_args=[
+        "-p", f"connection:=udpin:127.0.0.1:{port}", "-p", "rate_window_s:=1.5"]),
+        "mavlink_node")
+    diagnostics = graph.subscribe({"/diagnostics": DiagnosticArray})["/diagnostics"]
+    assert graph.wait_for_publishers("/diagnostics", 1, 30), node.output()
+    link = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=1,
+                                      source_component=1, dialect="ardupilotmega")
+    judged = []  # the too_slow values /diagnostics said, in order
+    for half_second in range(12):
+        boot_ms = round(1000 * (BOOT_S + 0.5 * half_second))
+        link.mav.vfr_hud_send(20.0, 20.0, 0, 50, 100.0, 0.0)
+        if half_second % 2 == 0:
+            link.mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_FIXED_WING,
+                                    mavutil.mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 10, 4)
+            link.mav.attitude_send(boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+            link.mav.global_position_int_send(boot_ms, 0, 0, 0, 0, 0, 0, 0, 0)
+            link.mav.servo_output_raw_send(boot_ms * 1000, 0, *PWM_US)
+        graph.spin(0.5)
+        judged.append(latest_values(diagnostics, "/mavlink_node").get("too_slow"))
+    slow = "ATTITUDE, GLOBAL_POSITION_INT, SERVO_OUTPUT_RAW"
+    assert slow in judged, judged  # (6 s: three windows or more judged them)
+    lines = [line for line in node.output().splitlines() if "arrives at" in line]
+    assert len(lines) == 3, node.output()  # each said once; VFR_HUD's 2 Hz is enough
+    assert any("ATTITUDE arrives at" in line and "the chain needs 20 Hz: raise SRn_EXTRA1 "
+               "(MAVm_EXTRA1 from ArduPilot 4.7" in line for line in lines), lines
+    assert any("SERVO_OUTPUT_RAW" in line and "SRn_RC_CHAN" in line for line in lines), lines

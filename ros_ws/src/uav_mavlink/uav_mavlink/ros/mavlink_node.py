@@ -65,6 +65,7 @@ from uav_mavlink.autopilot_messages import (
 )
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
 from uav_mavlink.sample_assembly import Sample, SampleAssembly
+from uav_mavlink.stream_rates import advice, slow_messages
 
 PARAMETERS = {
     "connection": ParameterSpec(
@@ -100,6 +101,10 @@ PARAMETERS = {
     "wind_filter_tau_s": ParameterSpec(
         "time constant of the filter the autopilot's wind estimate goes through (embedded-"
         "estimation paper eq. 4; the scenarios' 10 s) [s]", 10.0, 0.1, 1000.0),
+    "rate_window_s": ParameterSpec(
+        "wall time over which each message's rate is measured before it is judged too slow "
+        "for the chain (said once per message, with the setting that raises it) [s]", 5.0,
+        1.0, 600.0),
     "publish_clock": ParameterSpec("publish the autopilot's time, mapped to ROS time, on "
                                    "/clock (for nodes run with use_sim_time)", False),
     "qos": QOS_PARAMETER,
@@ -147,6 +152,18 @@ class MavlinkNode(Node):
         self.last_sample: Sample | None = None
         self.received: Counter[str] = Counter()  # message types since the last report
         self.reported_s = time.monotonic()
+        self.window: Counter[str] = Counter()  # message types in the rate window
+        self.window_start_s: float | None = None  # wall time the window opened [s]
+        self.slow: list[str] = []  # messages last judged too slow
+        self.warned: set[str] = set()  # slow messages already said
+        self.required_hz = {
+            "ATTITUDE": 1.0 / p["sample_period_s"],
+            "GLOBAL_POSITION_INT": 1.0 / p["position_max_age_s"],
+            "VFR_HUD": 1.0 / p["air_data_max_age_s"],
+            "SERVO_OUTPUT_RAW": 1.0 / p["outputs_max_age_s"]}
+        self.optional_hz = {"LOCAL_POSITION_NED": 1.0 / p["position_max_age_s"],
+                            **dict.fromkeys(("NAV_CONTROLLER_OUTPUT", "WIND", "WIND_COV", "RPM"),
+                                            1.0 / p["slow_max_age_s"])}
         self.counts = Counter()  # samples, reboots, bad packets, readings out of order
         self.diagnostics = Diagnostics(self, silent_after_s=None,
                                        before_publish=self.report)
@@ -201,6 +218,7 @@ class MavlinkNode(Node):
         if not self.target_system or message.get_srcSystem() != self.target_system:
             return
         self.received[kind] += 1
+        self.window[kind] += 1
         reading = read_message(message)
         if reading is None:
             return
@@ -223,6 +241,8 @@ class MavlinkNode(Node):
             self.autopilot = AUTOPILOTS[heartbeat.autopilot]
             self.get_logger().info(f"heard {self.autopilot} as system {self.target_system}")
         self.heartbeat_s = time.monotonic()
+        if self.window_start_s is None:
+            self.window_start_s = self.heartbeat_s
 
     def publish(self, sample: Sample) -> None:
         """The sample on every stream, stamped with its boot time mapped to ROS time."""
@@ -275,15 +295,36 @@ class MavlinkNode(Node):
         rates = {f"rate_{kind.lower()}_hz": f"{count / elapsed_s:.1f}"
                  for kind, count in sorted(self.received.items())}
         self.received.clear()
+        self._judge_rates(now_s)
         missing = self.last_sample.missing if self.last_sample else ()
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
-                  "missing": ", ".join(missing) or "none", **self.counts, **rates}
+                  "missing": ", ".join(missing) or "none",
+                  "too_slow": ", ".join(self.slow) or "none", **self.counts, **rates}
         if self.heartbeat_s is None or now_s - self.heartbeat_s > HEARTBEAT_LOST_S:
             self.diagnostics.update(WARN, "no autopilot heartbeat", values)
+        elif self.slow:
+            self.diagnostics.update(WARN, "streams too slow: " + ", ".join(self.slow), values)
         elif missing:
             self.diagnostics.update(WARN, "streams missing: " + ", ".join(missing), values)
         else:
             self.diagnostics.update(OK, f"linked to {self.autopilot}", values)
+
+    def _judge_rates(self, now_s: float) -> None:
+        """At the end of each rate window: the messages too slow, each said once."""
+        if self.window_start_s is None or now_s - self.window_start_s < self.parameters[
+                "rate_window_s"]:
+            return
+        elapsed_s = now_s - self.window_start_s
+        rates_hz = {kind: count / elapsed_s for kind, count in self.window.items()}
+        self.slow = slow_messages(rates_hz, self.required_hz, self.optional_hz)
+        for message in self.slow:
+            if message not in self.warned:
+                needed_hz = {**self.required_hz, **self.optional_hz}[message]
+                self.get_logger().warning(advice(message, rates_hz.get(message, 0.0),
+                                                 round(needed_hz, 1), self.autopilot))
+                self.warned.add(message)
+        self.window.clear()
+        self.window_start_s = now_s
 
 
 def main(args: list[str] | None = None) -> int:
