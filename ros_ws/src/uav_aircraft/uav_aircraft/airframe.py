@@ -102,6 +102,10 @@ class OutputMap:
     def value(self, raw: np.ndarray) -> np.ndarray:
         return self.scale * (raw - self.zero) / self.span
 
+    def raw(self, value: np.ndarray) -> np.ndarray:
+        """The raw output that gives value (value's inverse)."""
+        return self.zero + self.span * value / self.scale
+
 
 @dataclass(frozen=True)
 class MixedOutput:
@@ -245,3 +249,23 @@ def control_values(airframe: Airframe, raw_of: Callable[[int], np.ndarray],
     throttle = CONTROLS.index(THROTTLE)
     values[:, throttle] = np.clip(values[:, throttle], 0.0, 1.0)
     return values
+
+
+def outputs_of_controls(airframe: Airframe, controls: dict[str, float]) -> dict[int, float]:
+    """The raw outputs (by 1-based output) an autopilot would drive for the controls (by
+    CONTROLS name: aileron, elevator, rudder [rad], throttle [0..1]) through the airframe's
+    maps, a mixed output as its factor times its original's command: control_values'
+    inverse, for a simulated autopilot's servo outputs. A control the airframe does not map,
+    or a NaN one, drives nothing."""
+    outputs = {}
+    for name, control in airframe.controls.items():
+        value = controls.get(name, np.nan)
+        if np.isfinite(value):
+            outputs[control.output] = float(control.raw(value))
+    for mixed in airframe.mixed:
+        if mixed.of_output in outputs:
+            original = next(c for c in airframe.controls.values()
+                            if c.output == mixed.of_output)
+            outputs[mixed.output] = original.zero + mixed.factor * (
+                outputs[mixed.of_output] - original.zero)
+    return outputs
