@@ -22,17 +22,14 @@ import time
 from collections import Counter
 from typing import Any
 
-import numpy as np
 from builtin_interfaces.msg import Time
 from rclpy.clock import Clock as RosClock
 from rclpy.clock import ClockType
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from uav_aircraft.airframe import CONTROLS, MAX_OUTPUTS, control_values, load_airframe
+from uav_aircraft.airframe import load_airframe
 from uav_aircraft.vehicle_parameter import VEHICLE_PARAMETER
 from uav_aircraft.vehicles import load_vehicle
-from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS
-from uav_common.filters import LowPass
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
     air_data_message,
@@ -64,6 +61,7 @@ from uav_mavlink.autopilot_messages import (
     read_message,
 )
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
+from uav_mavlink.project_streams import StreamConversion
 from uav_mavlink.sample_assembly import Sample, SampleAssembly
 from uav_mavlink.stream_rates import advice, slow_messages
 
@@ -131,7 +129,7 @@ class MavlinkNode(Node):
             OUTPUTS: p["outputs_max_age_s"], SETPOINTS: p["slow_max_age_s"],
             WIND: p["slow_max_age_s"], ENGINE: p["slow_max_age_s"]},
             p["fuel_mass_kg"], math.radians(p["pitch_trim_deg"]))
-        self.wind_filter = LowPass(p["wind_filter_tau_s"])
+        self.conversion = StreamConversion(self.airframe, p["wind_filter_tau_s"])
         self.link = open_link(p["connection"], p["source_system"])
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publishers_ = {
@@ -228,6 +226,7 @@ class MavlinkNode(Node):
                                       "its clock is mapped to ROS time again")
             self.counts["reboots"] += 1
             self.offset_ns = None
+            self.conversion.reset()
         for sample in assembled.samples:
             self.publish(sample)
 
@@ -251,21 +250,13 @@ class MavlinkNode(Node):
             self.offset_ns = self.get_clock().now().nanoseconds - boot_ns
         seconds, nanoseconds = divmod(boot_ns + self.offset_ns, NS_PER_S)
         ros_stamp = Time(sec=seconds, nanosec=nanoseconds)
-        controls = np.full(len(CONTROL_CHANNELS), math.nan)
-        mapped = self._controls(sample.outputs_us)
-        for name, value in zip(CONTROLS, mapped, strict=True):
-            controls[CONTROL_CHANNELS.index(name)] = value
-        controls[CONTROL_CHANNELS.index("flap")] = 0.0  # no flap mapped: retracted
-        controls[CONTROL_CHANNELS.index("mixture")] = 1.0
-        controls[CONTROL_CHANNELS.index("ignition")] = 1.0
-        air_data = np.full(len(AIR_DATA_CHANNELS), math.nan)
-        air_data[AIR_DATA_CHANNELS.index("airspeed")] = sample.airspeed_mps
-        wind = self._filtered_wind(sample)
-        messages = {"state": state_message(0.0, sample.state),
-                    "controls": controls_message(0.0, controls),
-                    "air_data": air_data_message(0.0, air_data),
-                    "wind": wind_message(0.0, wind, self.wind_filter.tau_s),
-                    "setpoints": setpoints_message(0.0, sample.setpoints)}
+        streams = self.conversion.streams(sample)
+        messages = {"state": state_message(0.0, streams.state),
+                    "controls": controls_message(0.0, streams.controls),
+                    "air_data": air_data_message(0.0, streams.air_data),
+                    "wind": wind_message(0.0, streams.wind_filtered_ned_mps,
+                                         self.conversion.wind_filter.tau_s),
+                    "setpoints": setpoints_message(0.0, streams.setpoints)}
         for name, message in messages.items():
             message.header.stamp = ros_stamp
             self.publishers_[name].publish(message)
@@ -273,20 +264,6 @@ class MavlinkNode(Node):
             self.clock_publisher.publish(Clock(clock=ros_stamp))
         self.counts["samples"] += 1
         self.last_sample = sample
-
-    def _controls(self, outputs_us: np.ndarray) -> np.ndarray:
-        """Aileron, elevator, rudder [rad] and throttle through the servo mapping."""
-        return control_values(self.airframe, lambda output: outputs_us[None, output - 1],
-                              range(1, MAX_OUTPUTS + 1), 1)[0]
-
-    def _filtered_wind(self, sample: Sample) -> np.ndarray:
-        """The autopilot's wind through the filter; NaN while it is missing (the filter
-        holds its state and goes on from it when the wind returns)."""
-        if not np.isfinite(sample.wind_ned_mps).all():
-            return np.full(3, math.nan)
-        previous = self.last_sample
-        dt_s = sample.boot_time_s - previous.boot_time_s if previous else 0.0
-        return self.wind_filter.update(sample.wind_ned_mps, dt_s).copy()
 
     def report(self) -> None:
         """Diagnostics: the link, each message type's rate, the streams missing."""
