@@ -20,6 +20,7 @@ import math
 import sys
 import time
 from collections import Counter
+from pathlib import Path
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -174,7 +175,7 @@ class MavlinkNode(Node):
             f"; servo mapping {self.airframe.path}")
 
     @staticmethod
-    def _vehicle_airframe(vehicle: str) -> Any:
+    def _vehicle_airframe(vehicle: str) -> Path:
         files = load_vehicle(vehicle).airframe_files
         if len(files) != 1:
             raise ValueError(f"vehicle {vehicle} has {len(files)} airframe files "
@@ -190,8 +191,9 @@ class MavlinkNode(Node):
             while self.link is not None and (message := self.link.recv_msg()) is not None:
                 self.take(message)
         except OSError as error:
-            self.get_logger().error(f"link {self.parameters['connection']} failed ({error}): "
-                                    "opening it again every second")
+            if self.link is not None:  # said when it fails, not at every attempt to reopen
+                self.get_logger().error(f"link {self.parameters['connection']} failed "
+                                        f"({error}): opening it again every second")
             self.link, self.reopen_s = None, time.monotonic()
 
     def _reopen(self) -> None:
@@ -276,7 +278,8 @@ class MavlinkNode(Node):
         missing = self.last_sample.missing if self.last_sample else ()
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
                   "missing": ", ".join(missing) or "none",
-                  "too_slow": ", ".join(self.slow) or "none", **self.counts, **rates}
+                  "too_slow": ", ".join(self.slow) or "none",
+                  "out_of_order": self.assembly.out_of_order, **self.counts, **rates}
         if self.heartbeat_s is None or now_s - self.heartbeat_s > HEARTBEAT_LOST_S:
             self.diagnostics.update(WARN, "no autopilot heartbeat", values)
         elif self.slow:
