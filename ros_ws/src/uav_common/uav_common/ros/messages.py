@@ -29,7 +29,13 @@ BODY_FRAME = "base_link_frd"
 
 def stamp(time_s: float) -> Time:
     """A ROS time from seconds of simulation time (rounded to the nanosecond)."""
-    seconds, nanoseconds = divmod(round(time_s * NANOSECONDS_PER_SECOND), NANOSECONDS_PER_SECOND)
+    return stamp_from_nanoseconds(round(time_s * NANOSECONDS_PER_SECOND))
+
+
+def stamp_from_nanoseconds(time_ns: int) -> Time:
+    """A ROS time from integer nanoseconds: exact where a float of seconds since 1970 would
+    resolve only 0.24 us."""
+    seconds, nanoseconds = divmod(time_ns, NANOSECONDS_PER_SECOND)
     return Time(sec=int(seconds), nanosec=int(nanoseconds))
 
 

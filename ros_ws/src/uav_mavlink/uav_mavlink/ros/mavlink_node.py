@@ -23,7 +23,6 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from builtin_interfaces.msg import Time
 from rclpy.clock import Clock as RosClock
 from rclpy.clock import ClockType
 from rclpy.node import Node
@@ -36,12 +35,14 @@ from uav_common.ros.messages import (
     air_data_message,
     controls_message,
     setpoints_message,
+    stamp_from_nanoseconds,
     state_message,
     wind_message,
 )
 from uav_common.ros.node_life import run_node
 from uav_common.ros.parameters import QOS_PARAMETER, ParameterSpec, declare_parameters
 from uav_common.ros.qos import CLOCK_QOS, STREAM_QOS_PROFILES
+from uav_common.sample_grid import NANOSECONDS_PER_SECOND
 from uav_fault_msgs.msg import (
     AircraftState,
     AirData,
@@ -108,7 +109,6 @@ PARAMETERS = {
                                    "/clock (for nodes run with use_sim_time)", False),
     "qos": QOS_PARAMETER,
 }
-NS_PER_S = 1_000_000_000
 READ_PERIOD_S = 0.005  # how often the link is read [s, wall time]
 HEARTBEAT_PERIOD_S = 1.0  # the onboard computer's heartbeat [s, wall time]
 HEARTBEAT_LOST_S = 3.0  # no autopilot heartbeat for this long: the link is lost [s]
@@ -149,9 +149,8 @@ class MavlinkNode(Node):
         # since 1970 resolves only 0.24 us
         self.offset_ns: int | None = None
         self.last_sample: Sample | None = None
-        self.received: Counter[str] = Counter()  # message types since the last report
-        self.reported_s = time.monotonic()
         self.window: Counter[str] = Counter()  # message types in the rate window
+        self.rates_hz: dict[str, float] = {}  # each message type's rate in the last window
         self.window_start_s: float | None = None  # wall time the window opened [s]
         self.slow: list[str] = []  # messages last judged too slow
         self.warned: set[str] = set()  # slow messages already said
@@ -217,7 +216,6 @@ class MavlinkNode(Node):
             return
         if not self.target_system or message.get_srcSystem() != self.target_system:
             return
-        self.received[kind] += 1
         self.window[kind] += 1
         reading = read_message(message)
         if reading is None:
@@ -247,11 +245,10 @@ class MavlinkNode(Node):
 
     def publish(self, sample: Sample) -> None:
         """The sample on every stream, stamped with its boot time mapped to ROS time."""
-        boot_ns = round(sample.boot_time_s * NS_PER_S)
+        boot_ns = round(sample.boot_time_s * NANOSECONDS_PER_SECOND)
         if self.offset_ns is None:
             self.offset_ns = self.get_clock().now().nanoseconds - boot_ns
-        seconds, nanoseconds = divmod(boot_ns + self.offset_ns, NS_PER_S)
-        ros_stamp = Time(sec=seconds, nanosec=nanoseconds)
+        ros_stamp = stamp_from_nanoseconds(boot_ns + self.offset_ns)
         streams = self.conversion.streams(sample)
         messages = {"state": state_message(0.0, streams.state),
                     "controls": controls_message(0.0, streams.controls),
@@ -260,7 +257,7 @@ class MavlinkNode(Node):
                                          self.conversion.wind_filter.tau_s),
                     "setpoints": setpoints_message(0.0, streams.setpoints)}
         for name, message in messages.items():
-            message.header.stamp = ros_stamp
+            message.header.stamp = ros_stamp  # exact: the helpers take float seconds
             self.publishers_[name].publish(message)
         if self.clock_publisher is not None:
             self.clock_publisher.publish(Clock(clock=ros_stamp))
@@ -268,13 +265,12 @@ class MavlinkNode(Node):
         self.last_sample = sample
 
     def report(self) -> None:
-        """Diagnostics: the link, each message type's rate, the streams missing."""
+        """Diagnostics: the link, each message type's rate over the last rate window, the
+        streams missing and those too slow."""
         now_s = time.monotonic()
-        elapsed_s, self.reported_s = now_s - self.reported_s, now_s
-        rates = {f"rate_{kind.lower()}_hz": f"{count / elapsed_s:.1f}"
-                 for kind, count in sorted(self.received.items())}
-        self.received.clear()
         self._judge_rates(now_s)
+        rates = {f"rate_{kind.lower()}_hz": f"{hz:.1f}"
+                 for kind, hz in sorted(self.rates_hz.items())}
         missing = self.last_sample.missing if self.last_sample else ()
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
                   "missing": ", ".join(missing) or "none",
@@ -295,12 +291,12 @@ class MavlinkNode(Node):
                 "rate_window_s"]:
             return
         elapsed_s = now_s - self.window_start_s
-        rates_hz = {kind: count / elapsed_s for kind, count in self.window.items()}
-        self.slow = slow_messages(rates_hz, self.required_hz, self.optional_hz)
+        self.rates_hz = {kind: count / elapsed_s for kind, count in self.window.items()}
+        self.slow = slow_messages(self.rates_hz, self.required_hz, self.optional_hz)
         for message in self.slow:
             if message not in self.warned:
                 needed_hz = {**self.required_hz, **self.optional_hz}[message]
-                self.get_logger().warning(advice(message, rates_hz.get(message, 0.0),
+                self.get_logger().warning(advice(message, self.rates_hz.get(message, 0.0),
                                                  round(needed_hz, 1), self.autopilot))
                 self.warned.add(message)
         self.window.clear()
