@@ -11,7 +11,9 @@ without integrating. Per evaluation:
 - Propeller: JSBSim's engine is switched off (`propulsion/jsbsim-engine-on` = 0): its
   propeller speed is a state run_ic() never advances. The thrust and hub moment at the
   measured engine speed come from the same propeller tables (uav_aircraft.propeller) and act
-  through the aircraft's `propeller_model` reactions.
+  through the aircraft's `propeller_model` reactions. An aircraft whose engine speed is not
+  measured (steady_engine_speed) turns it at the speed where the propeller absorbs the
+  engine's power at the throttle, as the trim does: the engine's lag is left out.
 - Mass: the fuel on board is the measured fuel mass.
 - Aircraft: the vehicle's XML as shipped, or as a model calibration (model_calibration.py)
   says the flown aircraft differs from it (a FlownAircraft: mass, coefficient and thrust scales).
@@ -102,13 +104,16 @@ class AircraftPredictor:
     shipped one or as `aircraft` says the flown one differs."""
 
     def __init__(self, faults_pct: Mapping[str, float], vehicle: Vehicle, propeller: Propeller,
-                 aircraft: FlownAircraft = NOMINAL) -> None:
+                 aircraft: FlownAircraft = NOMINAL, steady_engine_speed: bool = False) -> None:
+        """steady_engine_speed: ignore the state's engine speed and turn the propeller at its
+        steady speed for the throttle (module docstring)."""
         unknown = sorted(set(faults_pct) - set(MODEL_FAULT_NAMES))
         if unknown:
             raise ValueError(f"unknown fault names {unknown}; known: "
                              f"{', '.join(MODEL_FAULT_NAMES)}")
         self.faults_pct = dict(faults_pct)
         self.propeller = propeller
+        self.steady_engine_speed = steady_engine_speed
         self.commands = _commands(vehicle)
         self.fdm: jsbsim.FGFDMExec = create_fdm(vehicle, aircraft=aircraft)
         self.fdm[JSBSIM_ENGINE_ON] = 0
@@ -150,13 +155,13 @@ class AircraftPredictor:
         self.set_fuel(float(state[_STATE["fuel_mass"]]) / KG_PER_LB)
         fdm.run_ic()
         density_kg_m3 = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
+        effective_throttle = fdm[EFFECTIVE_THROTTLE]
+        axial_speed_mps = fdm["velocities/u-aero-fps"] * M_PER_FT
+        engine_rpm = (self.propeller.steady_rpm(effective_throttle, axial_speed_mps,
+                                                density_kg_m3)
+                      if self.steady_engine_speed else float(state[_STATE["engine_speed"]]))
         propeller_forces = self.propeller.forces(
-            float(state[_STATE["engine_speed"]]),
-            fdm[EFFECTIVE_THROTTLE],
-            fdm["velocities/u-aero-fps"] * M_PER_FT,
-            density_kg_m3,
-            body_rates_radps,
-        )
+            engine_rpm, effective_throttle, axial_speed_mps, density_kg_m3, body_rates_radps)
         apply_propeller_model(fdm, propeller_forces)
         fdm.run_ic()
         derivatives = np.array([fdm[name] for name in BODY_ACCELERATIONS])
@@ -166,12 +171,13 @@ class AircraftPredictor:
         return np.concatenate([to_body.T @ velocity_rate_body, derivatives[3:]])
 
 
-def aircraft_predictor_factory(vehicle: Vehicle,
-                               aircraft: FlownAircraft = NOMINAL) -> PredictorFactory:
+def aircraft_predictor_factory(vehicle: Vehicle, aircraft: FlownAircraft = NOMINAL,
+                               steady_engine_speed: bool = False) -> PredictorFactory:
     """Makes AircraftPredictor copies of one aircraft that share one set of propeller
     tables."""
     propeller = Propeller.from_vehicle(vehicle)
-    return lambda faults_pct: AircraftPredictor(faults_pct, vehicle, propeller, aircraft)
+    return lambda faults_pct: AircraftPredictor(faults_pct, vehicle, propeller, aircraft,
+                                                steady_engine_speed)
 
 
 def residual_generator(settings: ResidualSettings,
@@ -180,11 +186,13 @@ def residual_generator(settings: ResidualSettings,
     its models the aircraft a model calibration found (model; its air-data bias taken
     out)."""
     vehicle = load_vehicle(settings.vehicle)
+    steady_engine_speed = not settings.engine_speed_measured
     return ResidualGenerator(
-        aircraft_predictor_factory(vehicle, model), settings.fault_names,
+        aircraft_predictor_factory(vehicle, model, steady_engine_speed), settings.fault_names,
         settings.secant_step_pct, settings.tau_a_s, settings.sensitivity_period_s,
         settings.recovery_s, settings.wind_error_step_mps, model.sensor_bias,
         air_data_range=vehicle.air_data_range,
+        unmeasured=frozenset({"engine_speed"} if steady_engine_speed else ()),
     )
 
 

@@ -17,7 +17,8 @@ class ResidualSettings:
     """The residual generator's settings (embedded-estimation paper, eq. 5-8 and 15): the
     vehicle its model copies load, the faults whose sensitivities are S's columns, the
     secant step, F_a's time constant, the update and sensitivity periods, how long rows stay
-    invalid after a start or a lost channel, and the wind-error columns' step."""
+    invalid after a start or a lost channel, the wind-error columns' step, and
+    whether the engine speed is measured."""
 
     vehicle: str = declared_setting(VEHICLE_PARAMETER)
     fault_names: tuple[str, ...] = setting(
@@ -36,3 +37,7 @@ class ResidualSettings:
         "back (3 tau_a) [s]", 12.0, 0.0, 600.0)
     wind_error_step_mps: float = setting(
         "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 0.0, 10.0)
+    engine_speed_measured: bool = setting(
+        "the state's engine speed is measured; false: the models turn the propeller at the "
+        "speed where it absorbs the engine's power at the throttle (an autopilot that "
+        "streams no engine speed, such as PX4)", True)

@@ -89,7 +89,6 @@ ROW_NEEDS: tuple[frozenset[str], ...] = (
 # missing: their last good values held, the rows that need them invalid until recovery_s
 # after they are back.
 BRIDGED_GAP_S = 0.2
-_NEEDED = frozenset().union(*ROW_NEEDS)
 
 
 # Where the models' wind came from (Residuals.WIND_FILTERED, Residuals.WIND_AIR_DATA).
@@ -162,16 +161,25 @@ class ResidualGenerator:
         sensor_bias: SensorBias = NO_BIAS,
         bias_steps: Mapping[str, float] | None = None,
         air_data_range: AirDataRange | None = None,
+        unmeasured: frozenset[str] = frozenset(),
     ) -> None:
         """sensor_bias: the air-data bias taken out of measured air data; bias_steps:
         SensorBias field -> secant step (its unit) for a column of S per bias, named by the
         field (0 on samples that fly the filtered wind); air_data_range: the air data the
-        models may fly (air_data_usable; the vehicle's)."""
+        models may fly (air_data_usable; the vehicle's); unmeasured: state channels the
+        aircraft does not measure and its models do without (engine_speed, when they turn
+        the propeller at its steady speed): never missing, never needed."""
         if not secant_step_pct > 0:
             raise ValueError(f"secant step must be positive, got {secant_step_pct} %")
         if not wind_error_step_mps >= 0:
             raise ValueError(f"wind error step must be 0 (off) or positive, got "
                              f"{wind_error_step_mps} m/s")
+        unknown = sorted(unmeasured - set(STATE_CHANNELS))
+        if unknown:
+            raise ValueError(f"unknown state channels {unknown}")
+        self.measured = np.array([name not in unmeasured for name in STATE_CHANNELS])
+        self.row_needs = tuple(needs - unmeasured for needs in ROW_NEEDS)
+        self.needed = frozenset().union(*self.row_needs)
         self.sensitivity_period_s = sensitivity_period_s
         self.recovery_s = recovery_s
         self.air_data_range = air_data_range
@@ -254,7 +262,7 @@ class ResidualGenerator:
 
     def _update_row_validity(self, missing: set[str], time_s: float) -> np.ndarray:
         """Rows usable now; rows coming back from a dropout wait recovery_s."""
-        for row, needs in enumerate(ROW_NEEDS):
+        for row, needs in enumerate(self.row_needs):
             if needs & missing:
                 self.row_invalid_until_s[row] = math.inf
             elif self.row_invalid_until_s[row] == math.inf:
@@ -276,18 +284,18 @@ class ResidualGenerator:
         if self.newest_time_s is not None and time_s <= self.newest_time_s:
             raise ValueError(f"time {time_s} s does not follow {self.newest_time_s} s: "
                              "reset first")
-        finite = np.isfinite(state)
+        finite = np.isfinite(state) | ~self.measured
         missing = {name for name, ok in zip(STATE_CHANNELS, finite, strict=True) if not ok}
         missing |= {name for name, value in (("controls", controls), ("wind", wind_ned_mps))
                     if not np.all(np.isfinite(value))}
-        if missing & _NEEDED and self._bridges(time_s):
+        if missing & self.needed and self._bridges(time_s):
             self._filtered_fuel_kg(time_s, np.where(finite, state, self.held_state)[FUEL_MASS])
             return dataclasses.replace(self.latest, time_s=time_s)
         self.held_state = np.where(finite, state, self.held_state)
         for name, value in (("controls", controls), ("wind", wind_ned_mps)):
             if name not in missing:
                 self.held_inputs[name] = np.array(value, dtype=float)
-        if not np.all(np.isfinite(self.held_state)) or len(self.held_inputs) < 2:
+        if not np.all(np.isfinite(self.held_state[self.measured])) or len(self.held_inputs) < 2:
             return None  # some input never seen yet: nothing can be predicted
         state = self.held_state.copy()
         state[FUEL_MASS] = self._filtered_fuel_kg(time_s, state[FUEL_MASS])
@@ -315,7 +323,7 @@ class ResidualGenerator:
             self.predicted_filter.update(predicted_mean, dt_s)
             self.latest = self._sample(time_s, state, valid)
         self.last_time_s, self.last_velocity, self.last_prediction = time_s, velocity, prediction
-        self.last_complete = not missing & _NEEDED
+        self.last_complete = not missing & self.needed
         return self.latest
 
     def _filtered_fuel_kg(self, time_s: float, fuel_kg: float) -> float:
