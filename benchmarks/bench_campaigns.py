@@ -33,6 +33,7 @@ from pathlib import Path
 
 import dask.config
 from distributed import LocalCluster
+from uav_common.channels import DETECTION_THRESHOLD_PCT
 from uav_fault_estimator.campaigns.campaign import (
     LOCALHOST,
     QUIET_WORKERS,
@@ -41,7 +42,7 @@ from uav_fault_estimator.campaigns.campaign import (
 )
 from uav_fault_estimator.campaigns.cluster_security import ROLES, make_certificates, security
 from uav_fault_estimator.chain.offline import fly_and_estimate, wind_variant
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 

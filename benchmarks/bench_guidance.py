@@ -27,6 +27,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from uav_common.channels import DETECTION_THRESHOLD_PCT
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
@@ -35,7 +36,7 @@ from uav_fault_estimator.campaigns.campaign import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.chain.offline import fly_and_estimate
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_sim.guidance import route_errors
 from uav_sim.mpc_guidance import MpcGuidance
 from uav_sim.paths import scenarios_dir

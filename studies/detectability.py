@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_common.channels import PAPER_FAULT_NAMES
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
@@ -37,7 +38,6 @@ from uav_fault_estimator.campaigns.campaign import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.chain.offline import fly_and_estimate, wind_variant
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD
 from uav_fault_estimator.reporting.metrics import fault_metrics

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
 from uav_aircraft.vehicles import load_vehicle
+from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
@@ -42,7 +43,6 @@ from uav_fault_estimator.campaigns.campaign import (
 )
 from uav_fault_estimator.chain.offline import fly_and_estimate, sensor_flight, wind_variant
 from uav_fault_estimator.estimation.calibration_check import check_calibration
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.model_calibration import (
     ModelCalibration,

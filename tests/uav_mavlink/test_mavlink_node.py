@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import math
 import os
-import socket
 
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import latest_values
+from helpers.udp_ports import free_udp_port
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import (
@@ -33,12 +33,6 @@ BOOT_S = 100.0  # its boot time at the first step [s]
 PITCH_TRIM_DEG = 2.0
 WIND_NED_MPS = (3.0, -4.0, 0.5)
 PWM_US = (1600, 1450, 1750, 1500, 0, 0, 0, 0)  # aileron, elevator, throttle, rudder (aerosonde_sim)
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def roll_at(boot_s):

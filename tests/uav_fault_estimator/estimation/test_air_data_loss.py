@@ -11,8 +11,8 @@ import dataclasses
 import numpy as np
 import pytest
 from uav_common.channels import AIR_DATA_CHANNELS
+from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.chain.offline import fly_and_estimate
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.noise_model import SuiteNoise, load_noise_calibration
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings

@@ -13,8 +13,8 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
+from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.chain.offline import fly_and_estimate
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import default_scenario_path, load_scenario

@@ -6,8 +6,9 @@ flight stays below the detection threshold."""
 from __future__ import annotations
 
 import pytest
+from uav_common.channels import DETECTION_THRESHOLD_PCT
 from uav_fault_estimator.chain.offline import fly_and_estimate
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_fault_estimator.reporting.targets import DETECTED_WITHIN_S as DELAY_S
 from uav_fault_estimator.reporting.targets import RMSE_SHARE

@@ -84,6 +84,9 @@ ACTUATOR_FAULT_NAMES: tuple[str, ...] = (*STUCK_SURFACE_FAULT_NAMES, "engine_cut
 # Every fault a scenario can seed, in the order of the seeded fault vector.
 FAULT_NAMES: tuple[str, ...] = MODEL_FAULT_NAMES + ACTUATOR_FAULT_NAMES
 PAPER_FAULT_NAMES: tuple[str, ...] = FAULT_NAMES[:4]
+# A fault estimate at or above this is reported [%] (metrics.json's detection_threshold_pct;
+# what mavlink_node tells a ground station).
+DETECTION_THRESHOLD_PCT = 2.0
 
 
 def state_indices(*channels: str) -> list[int]:

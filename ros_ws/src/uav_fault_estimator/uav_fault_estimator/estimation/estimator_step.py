@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from uav_common.channels import DETECTION_THRESHOLD_PCT
 
 from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
 from uav_fault_estimator.estimation.estimator_settings import (
@@ -36,8 +37,6 @@ from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
 # The estimator has settled this long [s of sim time] after the first residual: errors are
 # judged from here (metrics.json's settle_s), and model_fit first judges a window this long.
 SETTLE_S = 20.0
-# A fault estimate at or above this is reported [%] (metrics.json's detection_threshold_pct).
-DETECTION_THRESHOLD_PCT = 2.0
 
 
 class RejectedSampleError(ValueError):

@@ -10,11 +10,12 @@ from pathlib import Path
 
 import numpy as np
 from uav_aircraft.flown_aircraft import DIAGNOSTIC_KEY as FLOWN_AIRCRAFT_KEY
+from uav_common.channels import DETECTION_THRESHOLD_PCT
 from uav_common.health import CPU_KEY, GUIDANCE_FALLBACKS_KEY, GUIDANCE_KEY, hardware_id
 from uav_common.message_fields import stamp_seconds
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT, SETTLE_S
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.model_file import MODEL_KEY
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.recording.project_bag import WALL_S, RecordingError

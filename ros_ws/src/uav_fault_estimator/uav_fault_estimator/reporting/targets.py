@@ -18,8 +18,7 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-
-from uav_fault_estimator.estimation.estimator_step import DETECTION_THRESHOLD_PCT
+from uav_common.channels import DETECTION_THRESHOLD_PCT
 
 # Per seeded fault: the estimate's RMS error after settle_s at most this share of the
 # fault's final seeded value; found (the estimate at the threshold) within this many seconds

@@ -10,16 +10,23 @@ through the airframe file's servo mapping; flap 0, mixture and ignition 1), `air
 (AirData: VFR_HUD's airspeed, the vanes' angles NaN), `wind/filtered` (WindEstimate: the
 autopilot's wind estimate, WIND or WIND_COV, through the paper's filter), `autopilot_setpoints`
 (NAV_CONTROLLER_OUTPUT's commanded roll and pitch), `/clock` when `publish_clock`, and
-`/diagnostics` (the link, each message type's rate, the streams missing). Sends only its own
-heartbeat (uav_mavlink.link: read-only to the aircraft).
+`/diagnostics` (the link, each message type's rate, the streams missing). Sends its own
+heartbeat and, where enabled, the fault estimates (`faults/estimate`) as NAMED_VALUE_FLOAT and
+the alarms (an estimate reaching the detection threshold, `faults/alarm`'s combined alarm) as
+STATUSTEXT (uav_mavlink.ground_reports); nothing else (uav_mavlink.link: read-only to the
+aircraft). Each fault of the link (the heartbeat lost and back, another system on the link,
+packets failing their checksum, readings out of order, a stream missing and back, a reboot,
+the link itself failing) is said once in the log and counted on `/diagnostics`.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import sys
 import time
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +55,8 @@ from uav_fault_msgs.msg import (
     AirData,
     AutopilotSetpoints,
     ControlInputs,
+    FaultAlarm,
+    FaultEstimate,
     WindEstimate,
 )
 
@@ -62,6 +71,7 @@ from uav_mavlink.autopilot_messages import (
     WIND,
     read_message,
 )
+from uav_mavlink.ground_reports import TEXT_SEVERITY, AlarmTexts, named_values
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
 from uav_mavlink.project_streams import StreamConversion
 from uav_mavlink.sample_assembly import Sample, SampleAssembly
@@ -107,6 +117,16 @@ PARAMETERS = {
         1.0, 600.0),
     "publish_clock": ParameterSpec("publish the autopilot's time, mapped to ROS time, on "
                                    "/clock (for nodes run with use_sim_time)", False),
+    "ground_estimates_hz": ParameterSpec(
+        "send the newest fault estimates (faults/estimate) to the ground station as "
+        "NAMED_VALUE_FLOAT, one per fault under a short name, at most this often; 0: none "
+        "[Hz, wall time]", 0.0, 0.0, 10.0),
+    "ground_alarms": ParameterSpec(
+        "send a STATUSTEXT when an estimate reaches the detection threshold or the "
+        "detector's combined alarm (faults/alarm) rises", False),
+    "ground_text_interval_s": ParameterSpec(
+        "the least time between two STATUSTEXT lines; what comes meanwhile goes with the "
+        "next [s, wall time]", 5.0, 1.0, 600.0),
     "qos": QOS_PARAMETER,
 }
 READ_PERIOD_S = 0.005  # how often the link is read [s, wall time]
@@ -162,7 +182,18 @@ class MavlinkNode(Node):
         self.optional_hz = {"LOCAL_POSITION_NED": 1.0 / p["position_max_age_s"],
                             **dict.fromkeys(("NAV_CONTROLLER_OUTPUT", "WIND", "WIND_COV", "RPM"),
                                             1.0 / p["slow_max_age_s"])}
-        self.counts = Counter()  # samples, reboots, bad packets, readings out of order
+        self.counts = Counter()  # samples, reboots, bad packets, other systems' messages
+        self.said: set[str] = set()  # link faults said once per node's life
+        self.heartbeat_lost = False
+        self.other_systems: set[int] = set()
+        self.missing: tuple[str, ...] = ()  # streams missing at the last sample
+        self.heard_s: dict[str, float] = {}  # each stream's last reading [s, wall time]
+        self.alarm_texts = AlarmTexts(p["ground_text_interval_s"])
+        self.estimates_sent_s = -math.inf  # wall time of the last NAMED_VALUE_FLOATs [s]
+        if p["ground_estimates_hz"] > 0 or p["ground_alarms"]:
+            self.create_subscription(FaultEstimate, "faults/estimate", self.on_estimate, qos)
+        if p["ground_alarms"]:
+            self.create_subscription(FaultAlarm, "faults/alarm", self.on_alarm, qos)
         self.diagnostics = Diagnostics(self, silent_after_s=None,
                                        before_publish=self.report)
         self.create_timer(READ_PERIOD_S, self.read_link, clock=_WALL)
@@ -203,24 +234,31 @@ class MavlinkNode(Node):
         self.get_logger().info(f"link {self.parameters['connection']} open again")
 
     def send_heartbeat(self) -> None:
-        if self.link is not None:
-            send_heartbeat(self.link)
+        self._send(send_heartbeat)
 
     def take(self, message: Any) -> None:
         kind = message.get_type()
         if kind == "BAD_DATA":
             self.counts["bad_packets"] += 1
+            self._say_once("bad_packets", "packets failing their checksum or cut short on the "
+                                          "link: dropped, counted on /diagnostics (bad_packets)")
             return
         if is_autopilot_heartbeat(message) and self._is_target(message.get_srcSystem()):
             self._heard(message)
             return
         if not self.target_system or message.get_srcSystem() != self.target_system:
+            self._other_system(message)
             return
         self.window[kind] += 1
         reading = read_message(message)
         if reading is None:
             return
+        self.heard_s[reading.stream] = time.monotonic()
+        out_of_order = self.assembly.out_of_order
         assembled = self.assembly.add(reading)
+        if self.assembly.out_of_order > out_of_order:
+            self._say_once("out_of_order", f"{kind} came out of order (older than one already "
+                                           "taken): dropped, counted on /diagnostics")
         if assembled.rebooted:
             self.get_logger().warning("the autopilot's boot time went back: it rebooted; "
                                       "its clock is mapped to ROS time again")
@@ -233,12 +271,31 @@ class MavlinkNode(Node):
     def _is_target(self, system: int) -> bool:
         return not self.target_system or system == self.target_system
 
+    def _other_system(self, message: Any) -> None:
+        """A message of a system other than the autopilot listened to (a second autopilot,
+        a ground station): ignored, the system said once."""
+        self.counts["other_systems_messages"] += 1
+        system = message.get_srcSystem()
+        if self.target_system and system not in self.other_systems:
+            self.other_systems.add(system)
+            self.get_logger().info(f"system {system} (component {message.get_srcComponent()}) "
+                                   f"is on the link too: its messages are ignored; this node "
+                                   f"listens to system {self.target_system}")
+
+    def _say_once(self, what: str, text: str) -> None:
+        if what not in self.said:
+            self.said.add(what)
+            self.get_logger().warning(text)
+
     def _heard(self, heartbeat: Any) -> None:
         if not self.target_system:
             self.target_system = heartbeat.get_srcSystem()
         if not self.autopilot:
             self.autopilot = AUTOPILOTS[heartbeat.autopilot]
             self.get_logger().info(f"heard {self.autopilot} as system {self.target_system}")
+        if self.heartbeat_lost:
+            self.heartbeat_lost = False
+            self.get_logger().info(f"the heartbeat of system {self.target_system} is back")
         self.heartbeat_s = time.monotonic()
         if self.window_start_s is None:
             self.window_start_s = self.heartbeat_s
@@ -263,6 +320,55 @@ class MavlinkNode(Node):
             self.clock_publisher.publish(Clock(clock=ros_stamp))
         self.counts["samples"] += 1
         self.last_sample = sample
+        self._say_missing(sample.missing)
+
+    def _say_missing(self, missing: tuple[str, ...]) -> None:
+        """A stream going missing (older than its maximum age) and coming back, said once
+        each time."""
+        lost = [name for name in missing if name not in self.missing]
+        back = [name for name in self.missing if name not in missing]
+        if lost:
+            self.get_logger().warning(f"streams missing: {', '.join(lost)} (older than their "
+                                      "maximum age; published as NaN until they return)")
+        if back:
+            self.get_logger().info(f"streams back: {', '.join(back)}")
+        self.missing = missing
+
+    def on_estimate(self, message: FaultEstimate) -> None:
+        """The estimates to the ground station: NAMED_VALUE_FLOAT at most
+        ground_estimates_hz, a STATUSTEXT for one reaching the threshold."""
+        now_s = time.monotonic()
+        hz = self.parameters["ground_estimates_hz"]
+        if hz > 0 and now_s - self.estimates_sent_s >= 1.0 / hz:
+            self.estimates_sent_s = now_s
+            boot_ms = self._boot_ms()
+            for name, value in named_values(message.names, message.values_pct):
+                self._send(lambda link, n=name, v=value: link.mav.named_value_float_send(
+                    boot_ms, n.encode(), v))
+        if self.parameters["ground_alarms"]:
+            self._send_text(self.alarm_texts.estimates(now_s, message.names,
+                                                       message.values_pct))
+
+    def on_alarm(self, message: FaultAlarm) -> None:
+        channels = [name for name, on in zip(message.channel_names, message.alarm,
+                                             strict=True) if on]
+        self._send_text(self.alarm_texts.alarm(time.monotonic(), message.combined_alarm,
+                                               channels))
+
+    def _send_text(self, text: str | None) -> None:
+        if text is not None:
+            self.get_logger().info(f"to the ground station: {text}")
+            self._send(lambda link: link.mav.statustext_send(TEXT_SEVERITY, text.encode()))
+
+    def _send(self, send: Callable[[Any], None]) -> None:
+        """send(link) if the link is open (a failed link is reopened by read_link)."""
+        if self.link is not None:
+            with contextlib.suppress(OSError):  # read_link says the failure, reopens the link
+                send(self.link)
+
+    def _boot_ms(self) -> int:
+        """The autopilot's boot time of the newest sample [ms] (0 before one)."""
+        return 0 if self.last_sample is None else round(self.last_sample.boot_time_s * 1000)
 
     def report(self) -> None:
         """Diagnostics: the link, each message type's rate over the last rate window, the
@@ -272,11 +378,19 @@ class MavlinkNode(Node):
         rates = {f"rate_{kind.lower()}_hz": f"{hz:.1f}"
                  for kind, hz in sorted(self.rates_hz.items())}
         missing = self.last_sample.missing if self.last_sample else ()
+        stale = [stream for stream, heard_s in sorted(self.heard_s.items())
+                 if now_s - heard_s > self.assembly.max_age_s[stream]]
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
                   "missing": ", ".join(missing) or "none",
+                  "stale": ", ".join(stale) or "none",
                   "too_slow": ", ".join(self.slow) or "none",
                   "out_of_order": self.assembly.out_of_order, **self.counts, **rates}
         if self.heartbeat_s is None or now_s - self.heartbeat_s > HEARTBEAT_LOST_S:
+            if self.heartbeat_s is not None and not self.heartbeat_lost:
+                self.heartbeat_lost = True
+                self.get_logger().warning(
+                    f"no heartbeat of system {self.target_system} for {HEARTBEAT_LOST_S:g} s: "
+                    "the streams it left are published as missing until it returns")
             self.diagnostics.update(WARN, "no autopilot heartbeat", values)
         elif self.slow:
             self.diagnostics.update(WARN, "streams too slow: " + ", ".join(self.slow), values)
