@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from uav_common.channels import STATE_CHANNELS
 from uav_common.filters import LowPass
-from uav_fault_estimator.estimation.residuals import ResidualGenerator
-from uav_fault_estimator.nodes.stamp_matching import (
+from uav_common.stamp_matching import (
     GuardedStream,
     StampGuard,
     StampMatcher,
 )
+from uav_fault_estimator.estimation.residuals import ResidualGenerator
 
 FAULTS = ("right_wing_lift_loss", "left_wing_drag_increase")
 AMPLITUDE = np.array([0.5, -0.3, 0.8, 0.05, -0.02, 0.03])   # A [m/s^2, rad/s^2]

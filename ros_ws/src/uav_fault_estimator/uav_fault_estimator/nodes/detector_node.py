@@ -30,6 +30,7 @@ from uav_common.message_fields import (
     state_array,
 )
 from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
+from uav_common.ros.matched_streams import MatchedStreams
 from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_life import run_node, when_subscribed
 from uav_common.ros.parameters import (
@@ -53,7 +54,6 @@ from uav_fault_estimator.detection.detector_settings import (
     self_tuning_detector,
 )
 from uav_fault_estimator.detection.generators import NO_SETPOINTS
-from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 # The core's settings (DetectorSettings), then the node's own.
 PARAMETERS = {

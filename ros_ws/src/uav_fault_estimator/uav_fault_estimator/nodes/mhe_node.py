@@ -16,6 +16,7 @@ import numpy as np
 from rclpy.node import Node
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
 from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
+from uav_common.ros.matched_streams import guarded
 from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_life import run_node, when_subscribed
 from uav_common.ros.parameters import (
@@ -27,6 +28,7 @@ from uav_common.ros.parameters import (
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_common.settings import parameter_specs, replaced, settings_from
+from uav_common.stamp_matching import GuardedStream, StampVerdict
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY, SOLVER_METHODS
@@ -47,8 +49,6 @@ from uav_fault_estimator.estimation.saved_estimate import (
     save_estimate,
 )
 from uav_fault_estimator.estimation.solve_status import SolveStatus
-from uav_fault_estimator.nodes.matched_streams import guarded
-from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
 
 # The core's settings (EstimatorSettings), then the node's own.
 PARAMETERS = {

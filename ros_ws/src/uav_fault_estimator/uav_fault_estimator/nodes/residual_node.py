@@ -25,6 +25,7 @@ from uav_common.envelope import (
 )
 from uav_common.message_fields import air_data_array, controls_array, state_array, wind_array
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
+from uav_common.ros.matched_streams import MatchedStreams
 from uav_common.ros.messages import BODY_FRAME, header
 from uav_common.ros.node_life import run_node, when_subscribed
 from uav_common.ros.parameters import (
@@ -49,7 +50,6 @@ from uav_fault_estimator.estimation.residuals import (
     WIND_AIR_DATA,
     ResidualSample,
 )
-from uav_fault_estimator.nodes.matched_streams import MatchedStreams
 
 # The core's settings (ResidualSettings), then the node's own.
 PARAMETERS = {

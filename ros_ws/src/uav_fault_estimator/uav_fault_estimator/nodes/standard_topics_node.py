@@ -32,6 +32,7 @@ from tf2_msgs.msg import TFMessage
 from uav_common.envelope import STATE_LIMITS, gate, state_rate_gate
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds, state_array
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
+from uav_common.ros.matched_streams import guarded
 from uav_common.ros.node_life import run_node, when_subscribed
 from uav_common.ros.parameters import (
     QOS_PARAMETER,
@@ -40,10 +41,9 @@ from uav_common.ros.parameters import (
     declare_parameters,
 )
 from uav_common.ros.qos import STREAM_QOS_PROFILES
+from uav_common.stamp_matching import GuardedStream, StampVerdict
 from uav_fault_msgs.msg import AircraftState, FaultEstimate, FaultVector
 
-from uav_fault_estimator.nodes.matched_streams import guarded
-from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampVerdict
 from uav_fault_estimator.viewing.standard_frames import GeodeticPoint, StandardFrames, StandardState
 
 PARAMETERS = {

@@ -1,5 +1,5 @@
-"""Subscriptions whose messages are matched by stamp (stamp_matching.py) for a node: the
-ROS side shared by residual_node and detector_node."""
+"""Subscriptions whose messages are matched by stamp (uav_common.stamp_matching) for a node:
+the ROS side shared by residual_node, detector_node and autopilot_node."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ from typing import Any
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
+
 from uav_common.envelope import RateGate, gate
 from uav_common.message_fields import stamp_nanoseconds
 from uav_common.ros.paced_publishing import ACK_EVERY_SAMPLES
-
-from uav_fault_estimator.nodes.stamp_matching import GuardedStream, StampMatcher, StampVerdict
+from uav_common.stamp_matching import GuardedStream, StampMatcher, StampVerdict
 
 # How many newer complete sets an optional message is waited for: a simulator in fast
 # mode has up to ACK_EVERY_SAMPLES samples per stream in flight, and the callbacks of
