@@ -13,6 +13,8 @@ from uav_mavlink.autopilot_messages import (
     ATTITUDE,
     OUTPUTS,
     POSITION,
+    RATES,
+    RATES_2,
     SETPOINTS,
     VELOCITY,
     WIND,
@@ -116,3 +118,27 @@ def test_px4s_wind_cov_is_already_ned():
 def test_a_message_the_chain_does_not_read_is_none():
     heartbeat = mavlink.MAVLink_heartbeat_message(1, 3, 0, 10, 4, 3)
     assert read_message(on_the_link(heartbeat)) is None
+
+
+@pytest.mark.timeout(10)
+def test_the_imus_give_body_rates_in_radians_per_second():
+    """ArduPilot's RAW_IMU (IMU1) and SCALED_IMU2 in whole mrad/s, PX4's HIGHRES_IMU in rad/s;
+    a time_usec as large as UNIX time is no boot time; another IMU's RAW_IMU is not read."""
+    raw = read_message(on_the_link(mavlink.MAVLink_raw_imu_message(
+        12_345_678, 10, -20, -1000, 200, -300, 50, 0, 0, 0)))
+    assert raw.stream == RATES and raw.boot_time_s == pytest.approx(12.345678)
+    assert raw.values == pytest.approx({"roll_rate": 0.2, "pitch_rate": -0.3,
+                                        "yaw_rate": 0.05})
+    second = read_message(on_the_link(mavlink.MAVLink_scaled_imu2_message(
+        7_000, 0, 0, -1000, -100, 0, 25, 0, 0, 0)))
+    assert second.stream == RATES_2 and second.boot_time_s == 7.0
+    assert second.values == pytest.approx({"roll_rate": -0.1, "pitch_rate": 0.0,
+                                           "yaw_rate": 0.025})
+    highres = read_message(on_the_link(mavlink.MAVLink_highres_imu_message(
+        1_700_000_000_000_000, 0.0, 0.0, -9.8, 0.1, -0.2, 0.3, 0.0, 0.0, 0.0, 1013.0, 0.0,
+        0.0, 20.0, 0)))
+    assert highres.stream == RATES and highres.boot_time_s is None  # UNIX time
+    assert highres.values == pytest.approx({"roll_rate": 0.1, "pitch_rate": -0.2,
+                                            "yaw_rate": 0.3}, rel=FLOAT32)
+    assert read_message(on_the_link(mavlink.MAVLink_raw_imu_message(
+        1_000, 0, 0, 0, 0, 0, 0, 0, 0, 0, id=1))) is None

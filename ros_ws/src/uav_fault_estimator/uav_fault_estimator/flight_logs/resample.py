@@ -5,7 +5,7 @@ calibration's sample_period_s (0.2 s); a log's streams come at their own rates a
 (rates at 2.5-250 Hz, servo outputs at 3-50 Hz, airspeed at 10 Hz). Each grid point t takes
 the stream's two neighbouring samples, the last at or before t and the first at or after it
 (a sample within uav_common.sample_grid.GRID_TOLERANCE_S of t counts as at t: stamps rounded to
-the microsecond), and:
+the microsecond), and (uav_common.interpolation: the rule the MAVLink link samples by too):
 
 - every stream is interpolated linearly between them: body rates, attitude and airspeed
   are smooth on the scale of the sample intervals, linear interpolation is exact on a ramp,
@@ -35,6 +35,14 @@ from dataclasses import dataclass
 import numpy as np
 from uav_aircraft.airframe import Airframe
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.interpolation import (
+    ANGULAR,
+    GAP_FACTOR,
+    HOLD,
+    LINEAR,
+    METHODS,
+    interpolate,
+)
 from uav_common.sample_grid import GRID_TOLERANCE_S
 
 from uav_fault_estimator.detection.detector import DetectorFlight
@@ -54,10 +62,6 @@ from uav_fault_estimator.flight_logs.streams import (
 )
 from uav_fault_estimator.flight_logs.surfaces import mixed_output_mismatches, surface_deflections
 
-# Samples further apart than this many median periods are a gap (a dropout), not jitter:
-# logged intervals of a healthy stream vary by tens of percent, a lost sample doubles one.
-GAP_FACTOR = 2.5
-
 
 def grid_times_s(start_s: float, end_s: float, period_s: float) -> np.ndarray:
     """The whole multiples k * period_s [s] from start_s to end_s [s] (both included, within
@@ -68,63 +72,23 @@ def grid_times_s(start_s: float, end_s: float, period_s: float) -> np.ndarray:
     return np.arange(first, last + 1) * period_s
 
 
-def _neighbours(times_s: np.ndarray, grid_s: np.ndarray,
-                gap_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For every grid point: the index of the last sample at or before it, of the first at or
-    after it (the same index for a grid point on a sample), and whether both exist and lie
-    at most gap_s [s] apart."""
-    left = np.searchsorted(times_s, grid_s + GRID_TOLERANCE_S, side="right") - 1
-    right = np.searchsorted(times_s, grid_s - GRID_TOLERANCE_S, side="left")
-    inside = (left >= 0) & (right < times_s.size)
-    # indices for every grid point (times_s is not empty), used only where inside
-    left, right = np.clip(left, 0, None), np.clip(right, None, times_s.size - 1)
-    valid = inside & (np.abs(times_s[right] - times_s[left]) <= gap_s)
-    return left, right, valid
-
-
 def max_gap_s(series: TimedSeries) -> float:
     """The longest interval [s] between two samples of series that is not a gap."""
     return GAP_FACTOR * series.median_period_s
 
 
-def _wrap_rad(angle_rad: np.ndarray) -> np.ndarray:
-    """Angles [rad] into (-pi, pi]; those already in it unchanged to the last bit."""
-    return angle_rad - 2.0 * np.pi * np.ceil((angle_rad - np.pi) / (2.0 * np.pi))
-
-
-# How a stream is resampled: linear interpolation, the same for angles (the short way round
-# into (-pi, pi]), or zero-order hold (the module's docstring says which suits what).
-LINEAR, ANGULAR, HOLD = "linear", "angular", "hold"
-
-
 def resample(series: TimedSeries, grid_s: np.ndarray, method: str,
              gap_s: float | None = None) -> np.ndarray:
     """Every column of series at the grid points grid_s (K,) [s] -> (K, k), by method
-    (LINEAR, ANGULAR or HOLD); NaN before the first and after the last sample and between
-    neighbouring samples further apart than gap_s [s] (default max_gap_s(series))."""
-    if method not in (LINEAR, ANGULAR, HOLD):
+    (LINEAR, ANGULAR or HOLD: uav_common.interpolation, the rule the MAVLink link samples
+    by too); NaN before the first and after the last sample and between neighbouring
+    samples further apart than gap_s [s] (default max_gap_s(series))."""
+    if method not in METHODS:
         raise ValueError(f"resampling method {method!r}: expected {LINEAR}, {ANGULAR} or {HOLD}")
-    values = np.full((grid_s.size, len(series.columns)), np.nan)
     if series.times_s.size == 0:
-        return values
-    times_s = series.times_s
-    left, right, valid = _neighbours(times_s, grid_s, max_gap_s(series) if gap_s is None
-                                     else gap_s)
-    start = series.values[left[valid]]
-    if method == HOLD:
-        values[valid] = start
-        return values
-    end = series.values[right[valid]]
-    span_s = times_s[right[valid]] - times_s[left[valid]]
-    elapsed_s = grid_s[valid] - times_s[left[valid]]
-    # 0 on a sample; clipped for a grid point within the tolerance before one
-    weight = np.clip(np.divide(elapsed_s, span_s, out=np.zeros_like(span_s),
-                               where=span_s > 0), 0.0, 1.0)[:, None]
-    if method == ANGULAR:
-        values[valid] = _wrap_rad(start + weight * _wrap_rad(end - start))
-    else:
-        values[valid] = start + weight * (end - start)
-    return values
+        return np.full((grid_s.size, len(series.columns)), np.nan)
+    return interpolate(series.times_s, series.values, grid_s,
+                       max_gap_s(series) if gap_s is None else gap_s, method)
 
 
 SLOW_MARGIN = 0.01  # relative: a median period this much above the grid's is still its rate

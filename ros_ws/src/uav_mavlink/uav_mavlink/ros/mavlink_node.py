@@ -3,13 +3,15 @@
 Listens on `connection` (pymavlink's form: `udpin:127.0.0.1:14550`, `/dev/ttyACM0,921600`,
 `tcp:HOST:PORT`) to the autopilot of `target_system` (0: the first one heard), samples what it
 streams onto a grid of its boot time (uav_mavlink.sample_assembly) and publishes, stamped with
-the autopilot's boot time mapped once to ROS time (again after a reboot), as sim_node does
+the autopilot's boot time mapped once to ROS time by a whole number of seconds (so that a
+grid point stays one; again after a reboot), as sim_node does
 (relative names, the `qos` chosen): `state` (AircraftState: ATTITUDE, GLOBAL_POSITION_INT or
 LOCAL_POSITION_NED, RPM; the fuel mass the parameter), `controls` (ControlInputs: SERVO_OUTPUT_RAW
 through the airframe file's servo mapping; flap 0, mixture and ignition 1), `air_data`
 (AirData: VFR_HUD's airspeed, the vanes' angles NaN), `wind/filtered` (WindEstimate: the
 autopilot's wind estimate, WIND or WIND_COV, through the paper's filter), `autopilot_setpoints`
-(NAV_CONTROLLER_OUTPUT's commanded roll and pitch), `/clock` when `publish_clock`, and
+(NAV_CONTROLLER_OUTPUT's commanded roll and pitch, POSITION_TARGET_GLOBAL_INT's commanded
+vertical velocity), `/clock` when `publish_clock`, and
 `/diagnostics` (the link, each message type's rate, the streams missing). Sends its own
 heartbeat and, where enabled, the fault estimates (`faults/estimate`) as NAMED_VALUE_FLOAT and
 the alarms (an estimate reaching the detection threshold, `faults/alarm`'s combined alarm) as
@@ -27,7 +29,6 @@ import sys
 import time
 from collections import Counter
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 from rclpy.clock import Clock as RosClock
@@ -68,13 +69,14 @@ from uav_mavlink.autopilot_messages import (
     POSITION,
     SETPOINTS,
     VELOCITY,
+    VELOCITY_SETPOINT,
     WIND,
     read_message,
 )
 from uav_mavlink.ground_reports import TEXT_SEVERITY, AlarmTexts, named_values
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
 from uav_mavlink.project_streams import StreamConversion
-from uav_mavlink.sample_assembly import Sample, SampleAssembly
+from uav_mavlink.sample_assembly import Sample, SampleAssembly, ros_offset_ns
 from uav_mavlink.stream_rates import advice, slow_messages
 
 PARAMETERS = {
@@ -92,17 +94,19 @@ PARAMETERS = {
     "sample_period_s": ParameterSpec("period of the grid the streams are sampled onto, on the "
                                      "autopilot's clock [s]", 0.05, 0.01, 1.0),
     "attitude_max_age_s": ParameterSpec(
-        "the longest ATTITUDE is held before the state's attitude and rates are missing [s]",
-        0.2, 0.01, 10.0),
+        "the longest gap between two ATTITUDE (and IMU) messages the state's attitude and "
+        "rates are interpolated over [s]", 0.2, 0.01, 10.0),
     "position_max_age_s": ParameterSpec(
-        "the longest the position and velocity messages are held [s]", 0.5, 0.01, 10.0),
+        "the longest gap between two position or velocity messages interpolated over [s]",
+        0.5, 0.01, 10.0),
     "outputs_max_age_s": ParameterSpec(
-        "the longest SERVO_OUTPUT_RAW is held before the controls are missing [s]", 0.5,
-        0.01, 10.0),
+        "the longest gap between two SERVO_OUTPUT_RAW interpolated over [s]", 0.5, 0.01,
+        10.0),
     "air_data_max_age_s": ParameterSpec(
-        "the longest VFR_HUD's airspeed is held [s]", 1.0, 0.01, 10.0),
+        "the longest gap between two VFR_HUD interpolated over [s]", 1.0, 0.01, 10.0),
     "slow_max_age_s": ParameterSpec(
-        "the longest the wind, setpoints and engine speed are held [s]", 3.0, 0.1, 60.0),
+        "the longest the wind, setpoints and engine speed are held (not waited for, not "
+        "interpolated) [s]", 3.0, 0.1, 60.0),
     "fuel_mass_kg": ParameterSpec("the fuel on board, which no autopilot streams (0 for an "
                                   "electric aircraft) [kg]", 0.0, 0.0, 1000.0),
     "pitch_trim_deg": ParameterSpec(
@@ -115,6 +119,10 @@ PARAMETERS = {
         "wall time over which each message's rate is measured before it is judged too slow "
         "for the chain (said once per message, with the setting that raises it) [s]", 5.0,
         1.0, 600.0),
+    "boot_time_is_ros_time": ParameterSpec(
+        "the autopilot's boot time is ROS time already (an autopilot played by the simulator "
+        "on its /clock): stamp with it as it is, instead of mapping it by the whole seconds "
+        "between the two at the first sample", False),
     "publish_clock": ParameterSpec("publish the autopilot's time, mapped to ROS time, on "
                                    "/clock (for nodes run with use_sim_time)", False),
     "ground_estimates_hz": ParameterSpec(
@@ -143,11 +151,13 @@ class MavlinkNode(Node):
         super().__init__("mavlink_node")
         self.parameters = declare_parameters(self, PARAMETERS)
         p = self.parameters
-        self.airframe = load_airframe(p["airframe"] or self._vehicle_airframe(p["vehicle"]))
+        self.airframe = load_airframe(p["airframe"]
+                                      or load_vehicle(p["vehicle"]).only_airframe_file())
         self.assembly = SampleAssembly(p["sample_period_s"], {
             ATTITUDE: p["attitude_max_age_s"], POSITION: p["position_max_age_s"],
             VELOCITY: p["position_max_age_s"], AIRSPEED: p["air_data_max_age_s"],
             OUTPUTS: p["outputs_max_age_s"], SETPOINTS: p["slow_max_age_s"],
+            VELOCITY_SETPOINT: p["slow_max_age_s"],
             WIND: p["slow_max_age_s"], ENGINE: p["slow_max_age_s"]},
             p["fuel_mass_kg"], math.radians(p["pitch_trim_deg"]))
         self.conversion = StreamConversion(self.airframe, p["wind_filter_tau_s"])
@@ -180,7 +190,10 @@ class MavlinkNode(Node):
             "VFR_HUD": 1.0 / p["air_data_max_age_s"],
             "SERVO_OUTPUT_RAW": 1.0 / p["outputs_max_age_s"]}
         self.optional_hz = {"LOCAL_POSITION_NED": 1.0 / p["position_max_age_s"],
-                            **dict.fromkeys(("NAV_CONTROLLER_OUTPUT", "WIND", "WIND_COV", "RPM"),
+                            **dict.fromkeys(("RAW_IMU", "SCALED_IMU2", "HIGHRES_IMU"),
+                                            1.0 / p["attitude_max_age_s"]),
+                            **dict.fromkeys(("NAV_CONTROLLER_OUTPUT", "POSITION_TARGET_GLOBAL_INT",
+                                             "WIND", "WIND_COV", "RPM"),
                                             1.0 / p["slow_max_age_s"])}
         self.counts = Counter()  # samples, reboots, bad packets, other systems' messages
         self.said: set[str] = set()  # link faults said once per node's life
@@ -203,14 +216,6 @@ class MavlinkNode(Node):
             f"listening on {p['connection']} for "
             f"{'the first autopilot' if not self.target_system else f'system {self.target_system}'}"
             f"; servo mapping {self.airframe.path}")
-
-    @staticmethod
-    def _vehicle_airframe(vehicle: str) -> Path:
-        files = load_vehicle(vehicle).airframe_files
-        if len(files) != 1:
-            raise ValueError(f"vehicle {vehicle} has {len(files)} airframe files "
-                             f"({', '.join(files) or 'none'}): name one with -p airframe:=FILE")
-        return next(iter(files.values()))
 
     def read_link(self) -> None:
         """Every message waiting on the link, in order. A link that fails (a serial port
@@ -304,7 +309,8 @@ class MavlinkNode(Node):
         """The sample on every stream, stamped with its boot time mapped to ROS time."""
         boot_ns = round(sample.boot_time_s * NANOSECONDS_PER_SECOND)
         if self.offset_ns is None:
-            self.offset_ns = self.get_clock().now().nanoseconds - boot_ns
+            self.offset_ns = (0 if self.parameters["boot_time_is_ros_time"] else
+                              ros_offset_ns(self.get_clock().now().nanoseconds, boot_ns))
         ros_stamp = stamp_from_nanoseconds(boot_ns + self.offset_ns)
         streams = self.conversion.streams(sample)
         messages = {"state": state_message(0.0, streams.state),
@@ -325,6 +331,7 @@ class MavlinkNode(Node):
     def _say_missing(self, missing: tuple[str, ...]) -> None:
         """A stream going missing (older than its maximum age) and coming back, said once
         each time."""
+        missing = self._heard_missing(missing)
         lost = [name for name in missing if name not in self.missing]
         back = [name for name in self.missing if name not in missing]
         if lost:
@@ -333,6 +340,12 @@ class MavlinkNode(Node):
         if back:
             self.get_logger().info(f"streams back: {', '.join(back)}")
         self.missing = missing
+
+    def _heard_missing(self, missing: tuple[str, ...]) -> tuple[str, ...]:
+        """The streams missing that the autopilot has sent: one it never streams (PX4's
+        engine speed, ArduPlane's LOCAL_POSITION_NED where its position covers it) is
+        `not_streamed` on /diagnostics instead."""
+        return tuple(name for name in missing if name in self.heard_s)
 
     def on_estimate(self, message: FaultEstimate) -> None:
         """The estimates to the ground station: NAMED_VALUE_FLOAT at most
@@ -377,11 +390,13 @@ class MavlinkNode(Node):
         self._judge_rates(now_s)
         rates = {f"rate_{kind.lower()}_hz": f"{hz:.1f}"
                  for kind, hz in sorted(self.rates_hz.items())}
-        missing = self.last_sample.missing if self.last_sample else ()
+        missing = self._heard_missing(self.last_sample.missing if self.last_sample else ())
         stale = [stream for stream, heard_s in sorted(self.heard_s.items())
                  if now_s - heard_s > self.assembly.max_age_s[stream]]
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
                   "missing": ", ".join(missing) or "none",
+                  "not_streamed": ", ".join(sorted(set(self.assembly.max_age_s)
+                                                   - set(self.heard_s))) or "none",
                   "stale": ", ".join(stale) or "none",
                   "too_slow": ", ".join(self.slow) or "none",
                   "out_of_order": self.assembly.out_of_order, **self.counts, **rates}
