@@ -3,7 +3,8 @@
 # detector_node and standard_topics_node (and foxglove_node with --foxglove), each with
 # `ros2 run` in a process group of its own, their output in one folder. Several --scenario options fly several
 # aircraft in the one domain: vehicle k under /uavk with nodes of its own, on the first
-# simulator's /clock (the others follow it).
+# simulator's /clock (the others follow it). With --mavlink the aircraft is a real one:
+# mavlink_node listens to its autopilot in sim_node's place and gives the others /clock.
 # Ctrl-C (or SIGTERM) stops them all: SIGINT to each group, SIGKILL to what remains after
 # a few seconds. A node ending on its own stops the others too (every simulator finishing
 # its scenario: exit status 0; any other node, or a failing simulator: 1).
@@ -23,6 +24,7 @@ usage() {
     cat <<'EOF'
 usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DIR]
                          [--model-calibration FILE] [--foxglove]
+                         [--mavlink CONNECTION [--vehicle NAME]]
 
   --ns NS          namespace of every node (-r __ns:=NS)
   --params FILE    a ROS parameter file given to every node (--params-file)
@@ -33,6 +35,11 @@ usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DI
                    residual_node's models from scripts/calibrate_model.py's FILE, and
                    mhe_node's noise from the noise file it names
   --foxglove       also start foxglove_node: every topic live in Foxglove (ws://127.0.0.1:8765)
+  --mavlink CONNECTION
+                   the aircraft's autopilot instead of sim_node: mavlink_node listens on
+                   CONNECTION (udpin:127.0.0.1:14550, /dev/ttyACM0,921600, ...; docs/onboard.md)
+                   and publishes /clock; no --scenario
+  --vehicle NAME   with --mavlink: the aircraft the nodes model (default: aerosonde)
 EOF
 }
 
@@ -43,6 +50,8 @@ scenarios=()
 logs="$root/runs/bringup/logs"
 foxglove=""
 model_calibration=""
+mavlink=""
+mavlink_vehicle=""
 STOP_TIMEOUT_S=5
 
 die() {
@@ -52,7 +61,7 @@ die() {
 
 while [ $# -gt 0 ]; do
     case "$1" in
-        --ns|--params|--scenario|--logs|--model-calibration)
+        --ns|--params|--scenario|--logs|--model-calibration|--mavlink|--vehicle)
             if [ $# -lt 2 ] || [ -z "$2" ]; then die "$1 needs a value"; fi
             case "$1" in
                 --ns) ns="$2" ;;
@@ -61,6 +70,8 @@ while [ $# -gt 0 ]; do
                 --logs) logs="$2" ;;
                 --model-calibration) model_calibration="$(realpath -e -- "$2" 2>/dev/null)" \
                     || die "no model calibration file '$2'" ;;
+                --mavlink) mavlink="$2" ;;
+                --vehicle) mavlink_vehicle="$2" ;;
             esac
             shift 2 ;;
         --foxglove) foxglove=1; shift ;;
@@ -72,6 +83,12 @@ done
 if [ ${#scenarios[@]} -gt 1 ] && [ -n "$ns" ]; then
     die "--ns names the namespace of one aircraft; several --scenario fly /uav1, /uav2, ..."
 fi
+if [ -n "$mavlink" ] && [ ${#scenarios[@]} -gt 0 ]; then
+    die "--mavlink listens to one aircraft's autopilot: it flies no --scenario"
+fi
+if [ -n "$mavlink_vehicle" ] && [ -z "$mavlink" ]; then
+    die "--vehicle names the aircraft on --mavlink; a scenario names its own"
+fi
 
 "$root/scripts/setup.sh"
 # shellcheck disable=SC1091
@@ -82,6 +99,7 @@ export ROS_LOG_DIR="$logs"
 
 declare -A pids=()        # by node key: <vehicle>/<node>, or <node> alone
 declare -A simulators=()  # the keys of the sim_nodes still flying
+declare -A sources=()     # the keys of each aircraft's source: its sim_node or mavlink_node
 
 # The graph (uav_fault_estimator.chain.node_graph): a line per node in start order, KEY PACKAGE
 # EXECUTABLE and its ROS arguments, quoted for the shell.
@@ -92,6 +110,8 @@ for scenario in "${scenarios[@]}"; do plan_args+=(--scenario "$scenario"); done
 # a model calibration is checked there, for each scenario's vehicle: one line, no node started
 [ -n "$model_calibration" ] && plan_args+=(--model-calibration "$model_calibration")
 [ -n "$foxglove" ] && plan_args+=(--foxglove)
+[ -n "$mavlink" ] && plan_args+=(--mavlink "$mavlink")
+[ -n "$mavlink_vehicle" ] && plan_args+=(--vehicle "$mavlink_vehicle")
 plan="$(python -m uav_fault_estimator.chain.node_graph --caller bringup.sh "${plan_args[@]}")" || exit 2
 
 # Each node in a session (and so a process group) of its own, with SIGINT at its default:
@@ -107,6 +127,7 @@ start_node() {
         >"$logs/$key.log" 2>&1 &
     pids[$key]=$!
     [ "$executable" = sim_node ] && simulators[$key]=1
+    case "$executable" in sim_node|mavlink_node) sources[$key]="$executable" ;; esac
     return 0
 }
 
@@ -152,8 +173,8 @@ trap 'stop_all' EXIT
 
 echo "bringup.sh: ROS domain $ROS_DOMAIN_ID${ns:+, namespace $ns}; logs in $logs/<node>.log"
 while IFS= read -r line; do start_node "$line"; done <<<"$plan"
-for key in "${!simulators[@]}"; do  # a vehicle's nodes: uavk/<node>, or under --ns
-    vehicle="${key%sim_node}"
+for key in "${!sources[@]}"; do  # a vehicle's nodes: uavk/<node>, or under --ns
+    vehicle="${key%"${sources[$key]}"}"
     topic="${vehicle:+/$vehicle}faults/estimate"
     [ -z "$vehicle" ] && [ -n "$ns" ] && topic="${ns%/}/$topic"
     echo "bringup.sh: running; watch with: source scripts/env.sh; ros2 topic echo $topic"
@@ -161,6 +182,7 @@ done
 if [ -n "$foxglove" ]; then
     echo "bringup.sh: live in Foxglove: open a connection to the address in $logs/foxglove_node.log (default ws://127.0.0.1:8765)"
 fi
+[ -n "$mavlink" ] && echo "bringup.sh: mavlink_node listens on $mavlink (log: $logs/mavlink_node.log)"
 echo "bringup.sh: Ctrl-C stops every node"
 
 while true; do

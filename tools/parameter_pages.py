@@ -67,6 +67,7 @@ NODES = (
         ("recorder_node", "docs/ros_interface.md"), ("foxglove_node", "docs/ros_interface.md"),
         ("log_replay_node", "docs/flight_logs.md"))),
     NodeParameters("mavlink_node", "uav_mavlink.ros.mavlink_node", "docs/onboard.md"),
+    NodeParameters("autopilot_node", "uav_mavlink.ros.autopilot_node", "docs/simulator.md"),
 )
 
 

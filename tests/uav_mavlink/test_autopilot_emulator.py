@@ -20,8 +20,15 @@ from uav_mavlink.autopilot_emulator import (
     AutopilotEmulator,
     FlightSample,
 )
-from uav_mavlink.autopilot_messages import STREAMS, read_message
-from uav_mavlink.sample_assembly import SampleAssembly
+from uav_mavlink.autopilot_messages import (
+    ENGINE,
+    SETPOINTS,
+    STREAMS,
+    VELOCITY,
+    VELOCITY_SETPOINT,
+    read_message,
+)
+from uav_mavlink.sample_assembly import HELD_STREAMS, SampleAssembly
 from uav_mavlink.stream_rates import ARDUPILOT, PX4
 from uav_sim.scenario import default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
@@ -33,6 +40,9 @@ RESOLUTION = {"latitude": 2e-9, "longitude": 2e-9, "altitude": 6e-4, "roll": 1e-
               "pitch": 1e-6, "yaw": 1e-6, "velocity_north": 6e-3, "velocity_east": 6e-3,
               "velocity_down": 6e-3, "roll_rate": 1e-6, "pitch_rate": 1e-6, "yaw_rate": 1e-6}
 PWM_STEP_US = 1.0  # SERVO_OUTPUT_RAW carries whole microseconds
+# The streams each stack sends nothing of: missing at every grid point. (ArduPlane sends no
+# LOCAL_POSITION_NED, neither stack a POSITION_TARGET_GLOBAL_INT, PX4 no RPM.)
+NOT_SENT = {ARDUPILOT: {VELOCITY, VELOCITY_SETPOINT}, PX4: {VELOCITY_SETPOINT, ENGINE}}
 
 
 def flight_sample(sample) -> FlightSample:
@@ -47,7 +57,11 @@ def through_the_link(stack: str, rates_hz: dict[str, float]):
     simulation = Simulation(scenario)
     airframe = load_airframe(next(iter(load_vehicle("aerosonde").airframe_files.values())))
     emulator = AutopilotEmulator(stack, airframe, rates_hz)
-    assembly = SampleAssembly(PERIOD_S, dict.fromkeys(STREAMS, 0.5 * PERIOD_S), 0.0)
+    # a waited stream's gap below its period: each grid point is read off the reading on it;
+    # a held stream's hold over one period: the reading before the point (see the test)
+    max_age_s = {stream: (1.5 if stream in HELD_STREAMS else 0.5) * PERIOD_S
+                 for stream in STREAMS}
+    assembly = SampleAssembly(PERIOD_S, max_age_s, 0.0)
     sender, receiver = mavlink.MAVLink(None, srcSystem=1, srcComponent=1), mavlink.MAVLink(None)
     flown, read_back, sent = {}, [], {}
     sample = simulation.sample()
@@ -69,9 +83,18 @@ def through_the_link(stack: str, rates_hz: dict[str, float]):
                                                  (PX4, PX4_ONBOARD_HZ)])
 def test_a_flight_sent_at_the_sample_rate_reads_back_to_the_links_resolution(stack, messages):
     airframe, flown, read_back, _ = through_the_link(stack, dict.fromkeys(messages, 20.0))
-    assert len(read_back) == round(DURATION_S / PERIOD_S)  # every grid point but the last
-    for grid in read_back:
-        truth = flown[round(grid.boot_time_s / PERIOD_S)]
+    assert len(read_back) == round(DURATION_S / PERIOD_S) + 1  # every grid point, 0 to the end
+    # the first goes out with the first ATTITUDE, before the first of the other streams
+    for grid in read_back[1:]:
+        point = round(grid.boot_time_s / PERIOD_S)
+        truth = flown[point]
+        # the wind and setpoint messages of an instant go after the waited streams' (the
+        # emulator's order), and they are not waited for: the point holds the instant
+        # before's
+        held = flown[point - 1]
+        commanded = np.isfinite(held.setpoints[:2]).all()  # no setpoints before a command
+        expected = NOT_SENT[stack] if commanded else NOT_SENT[stack] | {SETPOINTS}
+        assert set(grid.missing) == expected, (stack, grid.boot_time_s, grid.missing)
         for name, resolution in RESOLUTION.items():
             index = STATE_CHANNELS.index(name)
             error = grid.state[index] - truth.state[index]
@@ -86,13 +109,14 @@ def test_a_flight_sent_at_the_sample_rate_reads_back_to_the_links_resolution(sta
             assert value == pytest.approx(truth.controls[CONTROL_CHANNELS.index(name)],
                                           abs=step * 1.001), (name, grid.boot_time_s)
         assert grid.airspeed_mps == pytest.approx(truth.air_data[0], rel=1e-6)
-        np.testing.assert_allclose(grid.wind_ned_mps, truth.wind_ned_mps, atol=1e-5)
-        if np.isfinite(truth.setpoints[:2]).all():
-            np.testing.assert_allclose(grid.setpoints[:2], truth.setpoints[:2], atol=1e-6)
+        np.testing.assert_allclose(grid.wind_ned_mps, held.wind_ned_mps, atol=1e-5)
+        if commanded:
+            np.testing.assert_allclose(grid.setpoints[:2], held.setpoints[:2], atol=1e-6)
     if stack == ARDUPILOT:  # the engine speed comes with RPM, ArduPilot's alone
         engine = STATE_CHANNELS.index("engine_speed")
         assert all(g.state[engine] == pytest.approx(flown[round(g.boot_time_s / PERIOD_S)]
-                                                    .state[engine], rel=1e-6) for g in read_back)
+                                                    .state[engine], rel=1e-6)
+                   for g in read_back[1:])
 
 
 @pytest.mark.timeout(60)

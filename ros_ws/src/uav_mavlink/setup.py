@@ -11,7 +11,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
-        (f"share/{PACKAGE}/config", ["config/mavlink_node.yaml"]),
+        (f"share/{PACKAGE}/config", ["config/mavlink_node.yaml", "config/autopilot_node.yaml"]),
     ],
     install_requires=["setuptools"],
     zip_safe=True,
@@ -19,5 +19,7 @@ setup(
     maintainer_email="maintainers@uav-fault-diagnostics.example.org",
     description="An autopilot's MAVLink link as the project's streams.",
     license="Apache-2.0",
-    entry_points={"console_scripts": ["mavlink_node = uav_mavlink.ros.mavlink_node:main"]},
+    entry_points={"console_scripts": ["mavlink_node = uav_mavlink.ros.mavlink_node:main",
+                                      "autopilot_node = uav_mavlink.ros.autopilot_node:main",
+                                      "log_streamer = uav_mavlink.log_streamer:main"]},
 )

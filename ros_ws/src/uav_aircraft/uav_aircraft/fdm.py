@@ -74,6 +74,12 @@ def create_fdm(vehicle: Vehicle, dt_s: float = JSBSIM_DT_S,
     return fdm
 
 
+def loaded_fuel_kg(vehicle: Vehicle, aircraft: FlownAircraft = NOMINAL) -> float:
+    """The fuel the aircraft carries at the start of a flight [kg]: its model's tanks, as
+    the flown aircraft loads them (0 for an electric aircraft)."""
+    return create_fdm(vehicle, aircraft=aircraft)[FUEL_LOADED_LBS] * KG_PER_LB
+
+
 def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
     """Seed faults [%] by name into the aircraft's fault properties."""
     for name, value_pct in faults_pct.items():

@@ -125,6 +125,22 @@ class Vehicle:
         """Its airframe files (the servo mappings of its logs' outputs) by name."""
         return {path.stem: path for path in sorted((self.folder / AIRFRAMES).glob("*.yaml"))}
 
+    def only_airframe_file(self) -> Path:
+        """Its airframe file when it has exactly one; VehicleError (one line) when it has
+        none or several: then the caller has to be told which."""
+        files = self.airframe_files
+        if len(files) != 1:
+            raise VehicleError(f"vehicle {self.name} has {len(files)} airframe files "
+                               f"({', '.join(files) or 'none'}): name one (the airframe "
+                               "parameter)")
+        return next(iter(files.values()))
+
+    @property
+    def simulated_airframe_file(self) -> Path:
+        """The airframe file of the simulator's outputs (`<vehicle>_sim.yaml`): how the
+        autopilot the simulator plays (autopilot_node) maps its surfaces to PWM."""
+        return self.folder / AIRFRAMES / f"{self.name}_sim.yaml"
+
     @property
     def detector_calibration_file(self) -> Path:
         """The detector's calibration on this aircraft's fault-free flights."""

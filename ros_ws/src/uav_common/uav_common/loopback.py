@@ -5,6 +5,7 @@ No ROS here."""
 from __future__ import annotations
 
 import ipaddress
+import socket
 
 LOOPBACK_NAMES = ("localhost",)
 
@@ -19,3 +20,11 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+def free_udp_port() -> int:
+    """A UDP port of loopback no socket holds now (the system's pick: free when asked, not
+    reserved)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]

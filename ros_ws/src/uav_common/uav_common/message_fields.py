@@ -72,3 +72,8 @@ def setpoints_array(message: Any) -> np.ndarray:
 def wind_array(message: Any) -> np.ndarray:
     """(3,) NED wind [m/s] from a WindEstimate."""
     return np.array([message.north_mps, message.east_mps, message.down_mps])
+
+
+def true_wind_array(message: Any) -> np.ndarray:
+    """(3,) NED wind [m/s] from a geometry_msgs/Vector3Stamped (sim_node's wind/true)."""
+    return np.array([message.vector.x, message.vector.y, message.vector.z])

@@ -1,7 +1,7 @@
 """The main job: fly a scenario through the nodes, record every topic, report.
 
     scripts/demo.sh [SCENARIO.yaml ...] [--out DIR] [--duration S]
-        [--model-calibration MODEL.yaml]
+        [--model-calibration MODEL.yaml] [--via-mavlink ardupilot|px4]
 
 Starts recorder_node, mhe_node, residual_node, detector_node and sim_node as processes
 (the executables `ros2 run` starts) on a ROS domain of the run's own, flies the scenario
@@ -18,6 +18,12 @@ calibration made on the same flights (noise_calibration_file) where the file nam
 that duration, logs/[uavk/]scenario.yaml, is what sim_node flies); faults starting later
 are not reached, which the start and the report say. The last line says whether each
 vehicle's run met the estimator's default targets (reporting/targets.py).
+
+--via-mavlink ardupilot (or px4) puts an autopilot's MAVLink link between the simulator and
+the chain, as on an aircraft: sim_node and autopilot_node (the stack it names, ArduPlane at
+the onboard page's advised rates) run under /sim, autopilot_node sends the flight on a UDP
+port of loopback to mavlink_node, and residual_node, mhe_node and detector_node take
+mavlink_node's streams (node_graph.played_autopilot_ros_args). One scenario only.
 
 Several scenarios fly several aircraft in the one domain: vehicle k flies the k-th under
 the namespace /uavk with nodes of its own, the first simulator publishes /clock and the
@@ -54,7 +60,9 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from uav_aircraft.vehicles import DEFAULT_VEHICLE
+from uav_aircraft.fdm import loaded_fuel_kg
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
+from uav_common.loopback import free_udp_port
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros_processes import (
     NO_LOG_FILE_ROS_ARGS,
@@ -80,6 +88,7 @@ STALL_TIMEOUT_S = 60.0  # wall time without simulated time going on, once flying
 ESTIMATES_TIMEOUT_S = 30.0  # wall time for the last estimates after the simulator ended
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 STATE_SUBSCRIBERS = 3  # residual_node, detector_node and the recorder
+PLAYED_STATE_SUBSCRIBERS = 2  # --via-mavlink: autopilot_node and the recorder
 # Each node's output subscriptions before it takes its inputs: mhe_node and the recorder on
 # residuals, the recorder and the demo on the estimates, the recorder on the alarms.
 OUTPUT_SUBSCRIBERS = {"residual_node": 2, "mhe_node": 2, "detector_node": 1}
@@ -184,6 +193,9 @@ class Progress:
     def subscriptions(self, topic: str) -> int:
         return self.node.count_subscribers(topic)
 
+    def publishers(self, topic: str) -> int:
+        return self.node.count_publishers(topic)
+
     def spin(self, timeout_s: float) -> None:
         """Handle what has arrived, waiting up to timeout_s for the first callback."""
         self.executor.spin_once(timeout_sec=timeout_s)
@@ -206,10 +218,14 @@ class Demo:
     """One run: the node processes, their watch, and their stop."""
 
     def __init__(self, vehicles: list[DemoAircraft], out: Path,
-                 calibration: node_graph.ModelCalibrationFiles | None = None) -> None:
-        """calibration: a model calibration's files for every vehicle (None: none)."""
+                 calibration: node_graph.ModelCalibrationFiles | None = None,
+                 via_mavlink: str = "") -> None:
+        """calibration: a model calibration's files for every vehicle (None: none);
+        via_mavlink: the stack (ardupilot, px4) whose link the one vehicle's flight goes
+        through ("": none)."""
         self.vehicles = vehicles
         self.calibration = calibration
+        self.via_mavlink = via_mavlink
         self.duration_s = vehicles[0].scenario.duration_s  # of every vehicle: one clock
         self.bag = out / "bag"
         self.logs = out / "logs"
@@ -228,7 +244,8 @@ class Demo:
         namespace, the model calibration, /clock), with the demo's own ros_args."""
         name = vehicle.node_name(executable) if vehicle else executable
         wiring = node_graph.node_ros_args(
-            executable, vehicle.namespace if vehicle else "", vehicle is self.vehicles[0],
+            executable, vehicle.namespace if vehicle else "",
+            vehicle is self.vehicles[0] and executable == node_graph.SIMULATOR,
             self.calibration, vehicle.scenario.vehicle if vehicle else DEFAULT_VEHICLE)
         process = RosProcess(ros2_run_argv(node_graph.PACKAGES[executable], executable,
                                            [*ros_args, *wiring]),
@@ -307,7 +324,8 @@ class Demo:
             self.start(vehicle, "mhe_node",
                        (["--params-file", str(vehicle.mhe_params)] if vehicle.mhe_params else [])
                        + subscribers_args("mhe_node"))
-            self.start(vehicle, "residual_node", subscribers_args("residual_node"))
+            self.start(vehicle, "residual_node", subscribers_args("residual_node") + (
+                node_graph.link_residual_ros_args(self.via_mavlink) if self.via_mavlink else []))
             self.start(vehicle, "detector_node", subscribers_args("detector_node"))
         outputs = {"residuals": "residual_node", "faults/estimate": "mhe_node",
                    "faults/alarm": "detector_node"}
@@ -316,10 +334,13 @@ class Demo:
                 for vehicle in self.vehicles for topic, node in outputs.items()),
                 STARTUP_TIMEOUT_S):
             raise StalledError(f"the nodes did not find each other in {STARTUP_TIMEOUT_S:g} s")
+        played = self.start_link() if self.via_mavlink else []
         started = time.monotonic()
         # the followers first: the first vehicle's simulator starts the clock
+        state_subscribers = PLAYED_STATE_SUBSCRIBERS if played else STATE_SUBSCRIBERS
         sims = [self.start(vehicle, "sim_node",
-                           fast_flight_ros_args(vehicle.scenario.path, STATE_SUBSCRIBERS))
+                           fast_flight_ros_args(vehicle.scenario.path, state_subscribers)
+                           + played)
                 for vehicle in reversed(self.vehicles)]
         simulators = tuple(vehicle.node_name("sim_node") for vehicle in self.vehicles)
         print(f"flying {self.duration_s:g} s of simulated time as fast as the nodes keep up",
@@ -343,6 +364,27 @@ class Demo:
         self.report_progress(final=True)
         print(f"flown in {time.monotonic() - started:.1f} s of wall time", flush=True)
         return dict(progress.estimates)
+
+    def start_link(self) -> list[str]:
+        """--via-mavlink: start the one vehicle's mavlink_node and, once the chain listens to
+        it, the autopilot_node that plays its autopilot; sim_node's arguments that put it
+        beside that autopilot."""
+        vehicle, progress = self.vehicles[0], self.progress
+        assert progress is not None
+        scenario = vehicle.scenario
+        port = free_udp_port()
+        fuel_kg = loaded_fuel_kg(load_vehicle(scenario.vehicle), scenario.aircraft)
+        self.start(vehicle, node_graph.LISTENER, node_graph.played_autopilot_ros_args(
+            node_graph.LISTENER, self.via_mavlink, port, fuel_kg, scenario.vehicle))
+        if not self.watch(lambda: progress.publishers(vehicle.topic("state")) >= 1
+                          and progress.subscriptions(vehicle.topic("state"))
+                          >= STATE_SUBSCRIBERS, STARTUP_TIMEOUT_S):
+            raise StalledError(f"mavlink_node and the nodes did not find each other in "
+                               f"{STARTUP_TIMEOUT_S:g} s")
+        self.start(vehicle, node_graph.AUTOPILOT, node_graph.played_autopilot_ros_args(
+            node_graph.AUTOPILOT, self.via_mavlink, port, fuel_kg, scenario.vehicle))
+        return node_graph.played_autopilot_ros_args(node_graph.SIMULATOR, self.via_mavlink,
+                                                    port, fuel_kg, scenario.vehicle)
 
     def stop(self) -> list[str]:
         """Stop the demo's node and every node process still running (SIGINT to each group
@@ -503,6 +545,9 @@ def main(runs_dir: Path) -> int:
     parser.add_argument("--model-calibration", type=Path, metavar="MODEL.yaml",
                         help="the models' calibration (scripts/calibrate_model.py) for every "
                         "vehicle")
+    parser.add_argument("--via-mavlink", choices=("ardupilot", "px4"), default="",
+                        help="the flight through an autopilot's MAVLink link: the simulator "
+                        "as this stack, the chain on mavlink_node (one scenario)")
     arguments = parser.parse_args()
     wall_started = time.monotonic()
     # Ctrl-C and SIGTERM: KeyboardInterrupt, whatever the caller left (an ignored SIGINT
@@ -514,6 +559,8 @@ def main(runs_dir: Path) -> int:
         scenarios = [replace(scenario, path=scenario.path.resolve()) for scenario in
                      map(load_scenario, arguments.scenarios or [default_scenario_path()])]
         overrides = [mhe_overrides(scenario) for scenario in scenarios]
+        if arguments.via_mavlink and len(scenarios) > 1:
+            raise ScenarioError("--via-mavlink flies one scenario through one link")
         if arguments.duration is None:
             check_one_clock(scenarios)
         else:  # every one cut to the same length
@@ -557,7 +604,7 @@ def main(runs_dir: Path) -> int:
         if vehicle.cut_note:
             print(f"demo: {vehicle.cut_note}", flush=True)
     print(f"demo: ROS domain {domain_id}, output in {out}", flush=True)
-    demo = Demo(vehicles, out, calibration)
+    demo = Demo(vehicles, out, calibration, arguments.via_mavlink)
     aborted: tuple[int, bool] | None = None  # a run cut short: exit status, show the bag
     try:
         received = demo.fly()

@@ -1,15 +1,19 @@
 """The node graph, described once: the nodes that fly and diagnose an aircraft, their
 packages, their start order, and the ROS arguments that wire them for one aircraft or
-several (namespaces, the one clock, a model calibration). demo_run.py (demo.sh) and
-scripts/bringup.sh start what it says (no ROS here).
+several (namespaces, the one clock, a model calibration), on a simulator or on an
+autopilot's MAVLink link (mavlink_node), and the simulated flight played through such a link
+(autopilot_node). demo_run.py (demo.sh) and scripts/bringup.sh start what it says (no ROS
+here).
 
     python -m uav_fault_estimator.chain.node_graph [--ns NS] [--scenario FILE ...]
-        [--params FILE] [--model-calibration FILE] [--foxglove] [--caller NAME]
+        [--mavlink CONNECTION [--vehicle NAME]] [--params FILE]
+        [--model-calibration FILE] [--foxglove] [--caller NAME]
 
 prints bringup.sh's plan: one line per node in start order, `KEY PACKAGE EXECUTABLE` and
 the node's ROS arguments, each word quoted for a POSIX shell (KEY: `uavk/node` with several
-aircraft, else the node's name). A scenario or model calibration that cannot be used is one
-line on stderr, named as the caller (default node_graph), and status 2.
+aircraft, else the node's name). A scenario or model calibration that cannot be used, or
+--mavlink with a scenario, is one line on stderr, named as the caller (default node_graph),
+and status 2.
 """
 
 from __future__ import annotations
@@ -21,23 +25,39 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from uav_aircraft.vehicles import DEFAULT_VEHICLE
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 from uav_common.ros_processes import NO_LOG_FILE_ROS_ARGS, SIM_TIME_ROS_ARGS
 from uav_sim.scenario import load_scenario
 
 from uav_fault_estimator.estimation.model_file import load_model_calibration
 
-SIMULATOR = "sim_node"
+SIMULATOR, LISTENER, AUTOPILOT = "sim_node", "mavlink_node", "autopilot_node"
 PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
             "mhe_node": "uav_fault_estimator", "detector_node": "uav_fault_estimator",
             "standard_topics_node": "uav_fault_estimator",
             "recorder_node": "uav_fault_estimator", "foxglove_node": "uav_fault_estimator",
-            "log_replay_node": "uav_fault_estimator", "mavlink_node": "uav_mavlink"}
+            "log_replay_node": "uav_fault_estimator", LISTENER: "uav_mavlink",
+            AUTOPILOT: "uav_mavlink"}
 # Each aircraft's nodes in start order: the simulator last, once the others listen.
 VEHICLE_NODES = ("residual_node", "mhe_node", "detector_node", "standard_topics_node",
                  SIMULATOR)
-# The nodes that model the aircraft: each takes its `vehicle` parameter from the scenario.
-MODELLING_NODES = ("residual_node", "mhe_node", "detector_node", SIMULATOR)
+# The nodes that model the aircraft: each takes its `vehicle` parameter from the scenario
+# (the link's two ends: for the vehicle's servo mapping).
+MODELLING_NODES = ("residual_node", "mhe_node", "detector_node", SIMULATOR, LISTENER,
+                   AUTOPILOT)
+# The nodes that give an aircraft's time: the first aircraft's publishes /clock.
+CLOCK_SOURCES = (SIMULATOR, LISTENER)
+# demo.sh --via-mavlink: the simulator and the autopilot it plays in this namespace, on a
+# loopback UDP link to mavlink_node, whose streams the chain takes at the graph's own names;
+# the simulator's truth the report reads stays at its own names too.
+PLAYED_AUTOPILOT_NS = "/sim"
+TRUTH_TOPICS = ("faults/seeded", "wind/true")
+LINK_HOST = "127.0.0.1"
+# The link has no flow control: a simulator as fast as its subscribers acknowledge sends
+# its samples in bursts, and a listener held up for a moment loses the datagrams beyond its
+# socket's buffer (the default flight at about 16 times real time lost 8 s of it). At this
+# pace the bursts are one sample's [simulated s per wall s].
+LINK_REAL_TIME_FACTOR = 10.0
 
 
 def vehicle_namespaces(count: int, namespace: str = "") -> list[str]:
@@ -83,8 +103,9 @@ def node_ros_args(executable: str, namespace: str, clock_leader: bool,
                   vehicle: str = DEFAULT_VEHICLE) -> list[str]:
     """The ROS arguments that wire one of an aircraft's nodes (or, namespace "", one of the
     whole graph): its namespace, the vehicle it models, the model calibration's files, and
-    /clock for every node but the simulator that publishes it (clock_leader: the first
-    aircraft's); and no rcl log file, as the launchers write the node's output to one."""
+    /clock for every node but the clock source (CLOCK_SOURCES) that publishes it
+    (clock_leader: the first aircraft's); and no rcl log file, as the launchers write the
+    node's output to one."""
     args = [*NO_LOG_FILE_ROS_ARGS, *(["-r", f"__ns:={namespace}"] if namespace else [])]
     if executable in MODELLING_NODES:
         args += ["-p", f"vehicle:={vehicle}"]
@@ -92,9 +113,39 @@ def node_ros_args(executable: str, namespace: str, clock_leader: bool,
         args += ["-p", f"model_calibration_file:={calibration.model_file}"]
     if calibration is not None and calibration.noise_file and executable == "mhe_node":
         args += ["-p", f"noise_calibration_file:={calibration.noise_file}"]
-    if not (executable == SIMULATOR and clock_leader):
+    if not (executable in CLOCK_SOURCES and clock_leader):
         args += SIM_TIME_ROS_ARGS
     return args
+
+
+def played_autopilot_ros_args(executable: str, stack: str, port: int,
+                              fuel_mass_kg: float, vehicle: str) -> list[str]:
+    """demo.sh --via-mavlink's ROS arguments, beyond node_ros_args', of the simulator, the
+    autopilot it plays (stack: ardupilot or px4) and mavlink_node, linked on UDP port `port`
+    of loopback (PLAYED_AUTOPILOT_NS), the simulator at LINK_REAL_TIME_FACTOR. mavlink_node
+    stamps with the boot time itself (the simulation time: no offset measured at the first
+    message), takes the fuel the simulated aircraft carries, fuel_mass_kg [kg], as its
+    fuel mass (no autopilot streams it), and reads the outputs with the vehicle's simulated
+    airframe (the one autopilot_node writes them with). residual_node: link_residual_ros_args.
+    """
+    namespace = ["-r", f"__ns:={PLAYED_AUTOPILOT_NS}"]
+    truth = [arg for topic in TRUTH_TOPICS for arg in ("-r", f"{topic}:=/{topic}")]
+    if executable == SIMULATOR:
+        return [*namespace, *truth, "-p", f"real_time_factor:={LINK_REAL_TIME_FACTOR!r}"]
+    if executable == AUTOPILOT:
+        return [*namespace, *truth, "-p", f"connection:=udpout:{LINK_HOST}:{port}",
+                "-p", f"stack:={stack}"]
+    if executable == LISTENER:
+        return ["-p", f"connection:=udpin:{LINK_HOST}:{port}",
+                "-p", "boot_time_is_ros_time:=true", "-p", f"fuel_mass_kg:={fuel_mass_kg!r}",
+                "-p", f"airframe:={load_vehicle(vehicle).simulated_airframe_file}"]
+    raise ValueError(f"{executable} is not one of the link's nodes")
+
+
+def link_residual_ros_args(stack: str) -> list[str]:
+    """residual_node's ROS arguments behind a stack's link: PX4 streams no engine speed, so
+    the models turn the propeller at its steady speed."""
+    return ["-p", "engine_speed_measured:=false"] if stack == "px4" else []
 
 
 @dataclass(frozen=True)
@@ -114,25 +165,34 @@ class PlannedNode:
 
 def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | None = None,
               calibration: ModelCalibrationFiles | None = None,
-              foxglove: bool = False) -> list[PlannedNode]:
+              foxglove: bool = False, mavlink: str = "",
+              vehicle: str = DEFAULT_VEHICLE) -> list[PlannedNode]:
     """bringup.sh's nodes in start order: every aircraft's (the last aircraft's first, so
     that the followers wait for the clock the first one's simulator starts), each simulator
     flying its scenario (none given: the shipped default, one aircraft) and each node
     modelling the scenario's vehicle, then foxglove_node for the whole graph; params: a
-    parameter file for every node. ScenarioError (a ValueError) for a scenario that cannot
-    be read."""
+    parameter file for every node. mavlink (a connection, as mavlink_node takes it): one
+    aircraft on an autopilot instead, mavlink_node listening on it and publishing /clock in
+    the simulator's place, every node modelling `vehicle`. ScenarioError (a ValueError) for
+    a scenario that cannot be read, ValueError for mavlink with scenarios."""
+    if mavlink and scenarios:
+        raise ValueError("--mavlink listens to one aircraft's autopilot: it flies no scenario")
     namespaces = vehicle_namespaces(max(len(scenarios), 1), namespace)
     common = ["--params-file", str(params)] if params else []
-    vehicles = scenario_vehicles(scenarios)
+    vehicles = [vehicle] if mavlink else scenario_vehicles(scenarios)
     plan = []
     for index in reversed(range(len(namespaces))):
         namespace = namespaces[index]
         for executable in VEHICLE_NODES:
+            if mavlink and executable == SIMULATOR:
+                executable = LISTENER
             # the parameter file first: what the graph sets overrides it (rcl: the last wins)
             args = [*common, *node_ros_args(executable, namespace, index == 0, calibration,
                                             vehicles[index])]
             if executable == SIMULATOR and scenarios:
                 args += ["-p", f"scenario:={scenarios[index]}"]
+            if executable == LISTENER:
+                args += ["-p", f"connection:={mavlink}", "-p", "publish_clock:=true"]
             key = node_key(namespace if len(namespaces) > 1 else "", executable)
             plan.append(PlannedNode(key, PACKAGES[executable], executable, args))
     if foxglove:
@@ -149,14 +209,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--params", type=Path)
     parser.add_argument("--model-calibration", type=Path)
     parser.add_argument("--foxglove", action="store_true")
+    parser.add_argument("--mavlink", default="", metavar="CONNECTION")
+    parser.add_argument("--vehicle", default=DEFAULT_VEHICLE, choices=vehicle_names())
     parser.add_argument("--caller", default="node_graph", help="the name errors start with")
     arguments = parser.parse_args(argv)
     try:
-        calibration = (model_calibration_files(arguments.model_calibration,
-                                               scenario_vehicles(arguments.scenario))
+        vehicles = ([arguments.vehicle] if arguments.mavlink
+                    else scenario_vehicles(arguments.scenario))
+        calibration = (model_calibration_files(arguments.model_calibration, vehicles)
                        if arguments.model_calibration else None)
         plan = live_plan(arguments.scenario, arguments.ns, arguments.params, calibration,
-                         arguments.foxglove)
+                         arguments.foxglove, arguments.mavlink, arguments.vehicle)
     except ValueError as error:  # ScenarioError, ModelCalibrationError
         print(f"{arguments.caller}: {' '.join(str(error).split())}", file=sys.stderr)
         return 2
