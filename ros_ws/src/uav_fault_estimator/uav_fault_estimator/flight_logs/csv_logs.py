@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import re
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +30,7 @@ from uav_fault_estimator.flight_logs.topics import (
     LogStreams,
     TopicMeaning,
     checked_topics,
+    message_times_ns,
     message_times_s,
     padded_rows,
     sought_topics,
@@ -81,10 +83,9 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
               for topic in topics if topic_file_key(topic) in files}
     if not files:
         raise ValueError(f"{folder}: no CSV files (one a topic, named after it)")
-    log_times = [t for topic, table in tables.items()
-                 for t in _named(files[topic_file_key(topic)], _log_times_ns, table)]
-    start_ns = min(log_times) if log_times else min(
-        (int(t) for table in tables.values() for t in _stamps_ns(table) if t > 0), default=0)
+    start_ns = log_start_ns(
+        [_named(files[topic_file_key(topic)], _log_times_ns, table)
+         for topic, table in tables.items()], [_stamps_ns(table) for table in tables.values()])
     merged = LogStreams()
     for topic, table in sorted(tables.items()):
         meaning = MEANINGS[topics[topic]]
@@ -105,6 +106,52 @@ def read_csv_folder(folder: Path, topics: Mapping[str, str] | None = None,
                      warnings=tuple(f"log {folder}: {note}" for note in merged.notes),
                      start_stamp_s=start_ns * 1e-9,
                      sought=sought_topics(topics, topic_file_name))
+
+
+def log_start_ns(log_times_ns: list[np.ndarray], stamps_ns: list[np.ndarray]) -> int:
+    """The instant a flight's times count from [ns]: the earliest log time of its files
+    (each file's log times, empty for a file without), else the earliest positive stamp, else
+    0."""
+    logged = [int(times.min()) for times in log_times_ns if times.size]
+    if logged:
+        return min(logged)
+    return min((int(t) for stamps in stamps_ns for t in stamps if t > 0), default=0)
+
+
+@dataclass(frozen=True)
+class TopicRows:
+    """One topic's messages as its CSV file holds them, in file order: stamps_ns (n,) their
+    header stamps [ns] (0: none), log_times_ns (n,) when each was logged [ns] (empty: the
+    file has no log time), fields by dotted path (an array field (n, k))."""
+
+    stamps_ns: np.ndarray
+    log_times_ns: np.ndarray
+    fields: dict[str, np.ndarray]
+
+    @property
+    def times_ns(self) -> np.ndarray:
+        """Each message's time [ns, the log's clock] (topics.message_times_ns)."""
+        return message_times_ns(self.stamps_ns, self.log_times_ns if self.log_times_ns.size
+                                else self.stamps_ns)
+
+
+def read_topic_rows(folder: Path, topic: str, fields: tuple[str, ...] = (),
+                    array_fields: tuple[str, ...] = ()) -> TopicRows | None:
+    """The fields (dotted paths; array_fields among them read as arrays) of one topic's CSV
+    file in folder, as read_csv_folder reads them; None when the folder has no file for the
+    topic. ValueError (one line naming the file) as read_csv_folder's."""
+    path = csv_files(Path(folder)).get(topic_file_key(topic))
+    if path is None:
+        return None
+    meaning = TopicMeaning("", fields, array_fields, "FLU", "", lambda *_: {}, ())
+    table = _table(path, meaning)
+    try:
+        values = {name: (_array_field(table, name) if name in array_fields
+                         else _numbers(table, name)) for name in fields}
+        return TopicRows(_stamps_ns(table), _log_times_ns(table), values)
+    except (KeyError, ValueError) as error:
+        reason = error.args[0] if error.args else type(error).__name__
+        raise ValueError(f"{path}: {reason}") from None
 
 
 def _named(path: Path, read: Callable[[dict[str, list[str]]], np.ndarray],

@@ -266,12 +266,16 @@ def padded_rows(arrays: list) -> np.ndarray:
     return rows
 
 
+def message_times_ns(stamps_ns: np.ndarray, log_times_ns: np.ndarray) -> np.ndarray:
+    """Each message's time [ns]: its header stamp [ns], or where it has none (0: a message
+    without a header, or one never stamped) the time it was logged [ns]."""
+    return np.where(stamps_ns > 0, stamps_ns, log_times_ns)
+
+
 def message_times_s(stamps_ns: np.ndarray, log_times_ns: np.ndarray,
                     start_ns: int) -> np.ndarray:
-    """Each message's time [s from start_ns]: its header stamp [ns], or where it has none
-    (0: a message without a header, or one never stamped) the time it was logged [ns]."""
-    times_ns = np.where(stamps_ns > 0, stamps_ns, log_times_ns)
-    return (times_ns - start_ns) * 1e-9
+    """Each message's time (message_times_ns) [s from start_ns]."""
+    return (message_times_ns(stamps_ns, log_times_ns) - start_ns) * 1e-9
 
 
 def sought_topics(topics: Mapping[str, str],

@@ -52,12 +52,8 @@ def read_ulog(path: Path, axes: str = "FRD") -> FlightLog:
     the convention of its rates and attitude. ValueError (one line naming the file) when it
     is not a readable ULog."""
     path = Path(path)
-    try:
-        log = ULog(str(path), message_name_filter_list=list(TOPICS))
-    except (ULogException, OSError, ValueError, IndexError) as error:
-        reason = " ".join(str(error).split()) or type(error).__name__
-        raise ValueError(f"{path}: not a readable PX4 ULog ({reason})") from None
-    data = {d.name: d.data for d in log.data_list if d.multi_id == 0}
+    log = open_ulog(path, TOPICS)
+    data = topic_data(log)
     start_us = log.start_timestamp
     streams: dict[str, TimedSeries] = {}
 
@@ -86,6 +82,22 @@ def read_ulog(path: Path, axes: str = "FRD") -> FlightLog:
                      output_unit=output_unit, airspeed_source=airspeed_source,
                      warnings=damaged if log.file_corruption or _cut_short(path) else (),
                      start_stamp_s=start_us / US_PER_S)
+
+
+def open_ulog(path: Path, topics: tuple[str, ...]) -> ULog:
+    """The ULog file at path with the named topics' data; ValueError (one line naming the
+    file) when it is not a readable ULog."""
+    try:
+        return ULog(str(path), message_name_filter_list=list(topics))
+    except (ULogException, OSError, ValueError, IndexError) as error:
+        reason = " ".join(str(error).split()) or type(error).__name__
+        raise ValueError(f"{path}: not a readable PX4 ULog ({reason})") from None
+
+
+def topic_data(log: ULog) -> dict[str, dict]:
+    """The first instance of each topic in log: its fields by pyulog's names (arrays
+    field[0], field[1], ...) as arrays, `timestamp` [us since boot] among them."""
+    return {d.name: d.data for d in log.data_list if d.multi_id == 0}
 
 
 def _cut_short(path: Path) -> bool:
