@@ -252,6 +252,22 @@ def campaigns(data: Mapping[str, Any]) -> list[str]:
                           for plan in data["plans"]))
 
 
+# --- the onboard graph behind the MAVLink link (benchmarks/bench_onboard.py) -------------
+
+def onboard(data: Mapping[str, Any]) -> list[str]:
+    nodes = data["nodes"]
+    lines = [f"Scenario `{Path(data['scenario']).name}`, {number(data['duration_s'])} s of "
+             f"flight through the link as {data['stack']}; CPU while the aircraft flies "
+             "(start-up and shutdown left out).", ""]
+    lines += table(("node", "CPU-s per flight s", "peak memory [MB]", "runs on"),
+                   ((node, figures["cpu_s_per_flight_s"], figures["peak_mb"],
+                     "the aircraft (played)" if node in data["on_the_aircraft"]
+                     else "the companion computer")
+                    for node, figures in nodes.items()))
+    share_pct = number(100 * data["bridge_cpu_share_of_residual_node"])
+    return [*lines, f"mavlink_node's CPU is {share_pct} % of residual_node's.", ""]
+
+
 # --- the detector on ALFA's real flights (scripts/alfa_benchmark.py) ----------------------
 
 ALFA_COLUMNS = ("flight", "failure", "outcome", "delay_s", "first_alarm_channel",
@@ -478,6 +494,10 @@ SECTIONS = (
             "cp runs/NAME/metrics.json docs/demo_NAME.json", demo_run,
             "metrics.json of demo runs through the ROS graph (docs/design.md defines the "
             "figures): one subsection per file docs/demo_NAME.json."),
+    Section("Onboard graph", "bench_onboard.json",
+            "python -m benchmarks.bench_onboard --duration 120 --json docs/bench_onboard.json",
+            onboard, "The onboard graph behind an autopilot's MAVLink link (docs/onboard.md): "
+            "each node's CPU per second of flight and its peak memory."),
     Section("Estimator benchmark", "bench_mhe.json",
             "python -m benchmarks.bench_mhe --updates 200 --json docs/bench_mhe.json", bench_mhe,
             "The estimator's update against other QP solvers on the same windows "
