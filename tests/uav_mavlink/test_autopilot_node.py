@@ -16,9 +16,9 @@ from geometry_msgs.msg import Vector3Stamped
 from helpers.diagnostics import latest_values
 from uav_aircraft.airframe import load_airframe
 from uav_aircraft.vehicles import load_vehicle
-from uav_common.channels import STATE_CHANNELS
+from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_common.loopback import free_udp_port
-from uav_common.message_fields import stamp_nanoseconds, state_array
+from uav_common.message_fields import controls_array, stamp_nanoseconds, state_array
 from uav_common.ros.messages import (
     air_data_message,
     controls_message,
@@ -90,26 +90,33 @@ def sent_at(stack: str, samples: list) -> dict[str, np.ndarray]:
     return {kind: np.array(times) for kind, times in times_s.items()}
 
 
-def start_link(start_process, stack: str, port: int) -> None:
-    """mavlink_node listening on the port, stamping with the boot time as it is, and
-    autopilot_node playing the stack to it from PLAYED."""
+def start_link(start_process, stack: str, port: int, listener_args: tuple = ()) -> None:
+    """mavlink_node listening on the port, stamping with the boot time as it is (and
+    listener_args), and autopilot_node playing the stack to it from PLAYED."""
     start_process(ros2_run_argv("uav_mavlink", "mavlink_node", ros_args=[
-        "-p", f"connection:=udpin:127.0.0.1:{port}", "-p", "boot_time_is_ros_time:=true"]),
-        "mavlink_node")
+        "-p", f"connection:=udpin:127.0.0.1:{port}", "-p", "boot_time_is_ros_time:=true",
+        *listener_args]), "mavlink_node")
     start_process(ros2_run_argv("uav_mavlink", "autopilot_node", ros_args=[
         "-r", f"__ns:={PLAYED}", "-p", f"connection:=udpout:127.0.0.1:{port}",
         "-p", f"stack:={stack}"]), "autopilot_node")
 
 
-def publish_flight(graph, samples: list) -> None:
-    """The samples on sim_node's topics under PLAYED, paced, once autopilot_node listens
-    (each publisher made once per test: the graph fixture keeps its node)."""
+def played_publishers(graph) -> dict:
+    """Publishers on sim_node's topics under PLAYED, once autopilot_node listens (made once
+    per test: the graph fixture keeps its node)."""
     publishers = {name: graph.node.create_publisher(kind, f"{PLAYED}/{name}", STREAM_QOS)
                   for name, kind in (("state", AircraftState), ("controls", ControlInputs),
                                      ("air_data", AirData), ("wind/true", Vector3Stamped),
                                      ("autopilot_setpoints", AutopilotSetpoints))}
     assert graph.wait("autopilot_node subscribed", lambda: all(
         p.get_subscription_count() >= 1 for p in publishers.values()), 30)
+    return publishers
+
+
+def publish_flight(graph, samples: list, publishers: dict | None = None) -> None:
+    """The samples on sim_node's topics under PLAYED, paced (played_publishers' unless
+    given)."""
+    publishers = publishers or played_publishers(graph)
     for sample in samples:
         t = sample.time_s
         for name, message in (("controls", controls_message(t, sample.controls)),
@@ -134,7 +141,9 @@ def test_the_flight_comes_out_of_mavlink_node_as_it_went_in(start_process, graph
     publish_flight(graph, samples)
     # every sample: the last one's messages release it (each stream has a reading at it)
     assert graph.wait("the flight out of mavlink_node",
-                      lambda: len(received["/state"]) >= len(samples), 30)
+                      lambda: len(received["/state"]) >= len(samples), 30), (
+        len(received["/state"]), len(samples), latest_values(received["/diagnostics"],
+                                                             "/mavlink_node"))
     graph.spin(2.0, until=lambda: latest_values(received["/diagnostics"],
                                                 f"{PLAYED}/autopilot_node").get("samples")
                == str(len(samples)))
@@ -203,3 +212,48 @@ def test_the_played_arduplane_answers_a_servo_parameter_from_the_airframe(start_
     assert (answer.param_id, answer.param_value, answer.param_type) == (
         "SERVO2_FUNCTION", 19.0, mavutil.mavlink.MAV_PARAM_TYPE_INT16)
     ground.close()
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(120)
+def test_the_servo_map_read_from_the_autopilot_replaces_a_wrong_file(start_process, graph,
+                                                                     tmp_path):
+    """mavlink_node given an airframe file with the aileron and elevator outputs swapped and
+    trims 100 us off reads the played ArduPlane's SERVOn_* and maps its outputs right."""
+    wrong = tmp_path / "wrong.yaml"
+    wrong.write_text(
+        "name: wrong\noutput_unit: pwm_us\nsurfaces:\n"
+        "  aileron:  {output: 2, trim_us: 1400, throw_us: 400, max_deflection_rad: 0.5236, "
+        "sign: -1}\n"
+        "  elevator: {output: 1, trim_us: 1600, throw_us: 400, max_deflection_rad: 0.5236, "
+        "sign: -1}\n"
+        "  rudder:   {output: 3, trim_us: 1500, throw_us: 400, max_deflection_rad: 0.5236, "
+        "sign: -1}\n"
+        "  throttle: {output: 4, idle_us: 1100, full_us: 1900}\n")
+    port = free_udp_port()
+    start_link(start_process, "ardupilot", port, ("-p", f"airframe:={wrong}",
+                                                  "-p", "servo_map_from_autopilot:=true"))
+    received = graph.subscribe({"/controls": ControlInputs}, STREAM_QOS)
+    received |= graph.subscribe({"/diagnostics": DiagnosticArray})
+    assert graph.wait_for_publishers("/controls", 1, 30)
+    samples = flight()
+    publishers = played_publishers(graph)
+    publish_flight(graph, samples[:5], publishers)  # heard: the parameters are asked for
+    assert graph.wait("the map read", lambda: latest_values(
+        received["/diagnostics"], "/mavlink_node").get("servo_map") == "autopilot", 30)
+    first = len(received["/controls"])
+    publish_flight(graph, samples[5:], publishers)
+    assert graph.wait("the flight out of mavlink_node",
+                      lambda: len(received["/controls"]) >= len(samples), 30), (
+        first, len(received["/controls"]), len(samples))
+    # SERVO_OUTPUT_RAW goes at 10 Hz: each control is the line through the flown one at its
+    # times; whole microseconds on the link: 1 us of a 500 us throw is 1.05e-3 rad at
+    # 0.5236 rad, of the 1000 us throttle 1e-3
+    sent_s = sent_at("ardupilot", samples)["SERVO_OUTPUT_RAW"]
+    times_s = np.array([s.time_s for s in samples])
+    flown = np.array([s.controls for s in samples])[np.searchsorted(times_s, sent_s)]
+    out = np.array([controls_array(m) for m in received["/controls"][first:]])
+    for name in ("aileron", "elevator", "rudder", "throttle"):
+        index = CONTROL_CHANNELS.index(name)
+        expected = np.interp(times_s[first:], sent_s, flown[:, index])
+        np.testing.assert_allclose(out[:, index], expected, atol=1.1e-3, err_msg=name)

@@ -7,7 +7,8 @@ the autopilot's boot time mapped once to ROS time by a whole number of seconds (
 grid point stays one; again after a reboot), as sim_node does
 (relative names, the `qos` chosen): `state` (AircraftState: ATTITUDE, GLOBAL_POSITION_INT or
 LOCAL_POSITION_NED, RPM; the fuel mass the parameter), `controls` (ControlInputs: SERVO_OUTPUT_RAW
-through the airframe file's servo mapping; flap 0, mixture and ignition 1), `air_data`
+through the airframe file's servo mapping, or ArduPilot's own SERVOn_* parameters read with
+PARAM_REQUEST_READ when `servo_map_from_autopilot`; flap 0, mixture and ignition 1), `air_data`
 (AirData: VFR_HUD's airspeed, the vanes' angles NaN), `wind/filtered` (WindEstimate: the
 autopilot's wind estimate, WIND or WIND_COV, through the paper's filter), `autopilot_setpoints`
 (NAV_CONTROLLER_OUTPUT's commanded roll and pitch, POSITION_TARGET_GLOBAL_INT's commanded
@@ -77,6 +78,7 @@ from uav_mavlink.ground_reports import TEXT_SEVERITY, AlarmTexts, named_values
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
 from uav_mavlink.project_streams import StreamConversion
 from uav_mavlink.sample_assembly import Sample, SampleAssembly, ros_offset_ns
+from uav_mavlink.servo_setup import ServoParameterReads, airframe_from_servo_parameters
 from uav_mavlink.stream_rates import advice, slow_messages
 
 PARAMETERS = {
@@ -91,6 +93,11 @@ PARAMETERS = {
     "airframe": ParameterSpec("airframe YAML mapping the autopilot's servo outputs to surfaces "
                               "(docs/flight_logs.md); empty: the vehicle's one airframe file",
                               ""),
+    "servo_map_from_autopilot": ParameterSpec(
+        "ArduPilot: read the outputs, trims, throws and reversals from the autopilot's "
+        "SERVOn_FUNCTION/MIN/MAX/TRIM/REVERSED parameters (PARAM_REQUEST_READ) and map "
+        "SERVO_OUTPUT_RAW with them, the surfaces' full deflections from the airframe file; "
+        "until they are read, or where they cannot be, the airframe file's map", False),
     "sample_period_s": ParameterSpec("period of the grid the streams are sampled onto, on the "
                                      "autopilot's clock [s]", 0.05, 0.01, 1.0),
     "attitude_max_age_s": ParameterSpec(
@@ -174,6 +181,10 @@ class MavlinkNode(Node):
                                 if p["publish_clock"] else None)
         self.target_system = p["target_system"]
         self.autopilot = ""  # ArduPilot or PX4, once heard
+        self.autopilot_component = 0  # its component id, once heard
+        # the servo parameters being read; None when not asked for, or done
+        self.servo_reads = ServoParameterReads() if p["servo_map_from_autopilot"] else None
+        self.servo_map = "file"  # where the map in use comes from: file, autopilot
         self.heartbeat_s: float | None = None  # wall time of its last heartbeat [s]
         # ROS time minus the autopilot's boot time [ns]: integers, as a float of seconds
         # since 1970 resolves only 0.24 us
@@ -215,7 +226,8 @@ class MavlinkNode(Node):
         self.get_logger().info(
             f"listening on {p['connection']} for "
             f"{'the first autopilot' if not self.target_system else f'system {self.target_system}'}"
-            f"; servo mapping {self.airframe.path}")
+            f"; servo mapping {self.airframe.path}"
+            + (" until the autopilot's SERVOn_* are read" if self.servo_reads else ""))
 
     def read_link(self) -> None:
         """Every message waiting on the link, in order. A link that fails (a serial port
@@ -240,6 +252,54 @@ class MavlinkNode(Node):
 
     def send_heartbeat(self) -> None:
         self._send(send_heartbeat)
+        self._read_servo_setup()
+
+    def _read_servo_setup(self) -> None:
+        """Ask the autopilot for its servo parameters (again for those unanswered), once it
+        is heard; give up, saying so once, after the reads' last attempt."""
+        reads = self.servo_reads
+        if reads is None or not self.autopilot:
+            return
+        if self.autopilot != "ArduPilot":
+            self.get_logger().warning(f"servo_map_from_autopilot: {self.autopilot}'s servo "
+                                      f"set-up is not read; the map stays {self.airframe.path}")
+            self.servo_reads = None
+            return
+        for name in reads.due(time.monotonic()):
+            self._send(lambda link, n=name: link.mav.param_request_read_send(
+                self.target_system, self.autopilot_component, n.encode(), -1))
+        if reads.given_up:
+            self.get_logger().warning(
+                f"the autopilot answered {len(reads.values)} of its "
+                f"{len(reads.values) + len(reads.unanswered)} servo parameters (none for "
+                f"{', '.join(reads.unanswered[:3])}...): the map stays {self.airframe.path}")
+            self.servo_reads = None
+
+    def _take_servo_parameter(self, message: Any) -> None:
+        """A PARAM_VALUE of the autopilot: once every servo parameter is in, the map they
+        give replaces the file's (said in one line, with what it could not express)."""
+        reads = self.servo_reads
+        if reads is None:
+            return
+        reads.take(message.param_id, message.param_value)
+        if not reads.complete:
+            return
+        self.servo_reads = None
+        try:
+            airframe, notes = airframe_from_servo_parameters(
+                reads.values, self.airframe, f"system {self.target_system}'s SERVOn_*")
+        except ValueError as error:
+            self.get_logger().error(f"the autopilot's servo parameters give no map ({error}): "
+                                    f"the map stays {self.airframe.path}")
+            return
+        self.airframe = self.conversion.airframe = airframe
+        self.servo_map = "autopilot"
+        maps = "; ".join(f"{name} output {c.output} trim {c.zero:.0f} us, "
+                         f"{c.span:+.0f} us to full" for name, c in airframe.controls.items())
+        copies = "".join(f"; output {m.output} copies {m.of_output} x {m.factor:.3g}"
+                         for m in airframe.mixed)
+        self.get_logger().info(f"servo mapping from the autopilot's parameters: {maps}{copies}"
+                               + "".join(f". {note}" for note in notes))
 
     def take(self, message: Any) -> None:
         kind = message.get_type()
@@ -253,6 +313,9 @@ class MavlinkNode(Node):
             return
         if not self.target_system or message.get_srcSystem() != self.target_system:
             self._other_system(message)
+            return
+        if kind == "PARAM_VALUE":
+            self._take_servo_parameter(message)
             return
         self.window[kind] += 1
         reading = read_message(message)
@@ -297,7 +360,9 @@ class MavlinkNode(Node):
             self.target_system = heartbeat.get_srcSystem()
         if not self.autopilot:
             self.autopilot = AUTOPILOTS[heartbeat.autopilot]
+            self.autopilot_component = heartbeat.get_srcComponent()
             self.get_logger().info(f"heard {self.autopilot} as system {self.target_system}")
+            self._read_servo_setup()
         if self.heartbeat_lost:
             self.heartbeat_lost = False
             self.get_logger().info(f"the heartbeat of system {self.target_system} is back")
@@ -394,6 +459,8 @@ class MavlinkNode(Node):
         stale = [stream for stream, heard_s in sorted(self.heard_s.items())
                  if now_s - heard_s > self.assembly.max_age_s[stream]]
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
+                  "servo_map": self.servo_map if self.servo_reads is None else "file, "
+                  f"reading the autopilot's ({len(self.servo_reads.values)} answered)",
                   "missing": ", ".join(missing) or "none",
                   "not_streamed": ", ".join(sorted(set(self.assembly.max_age_s)
                                                    - set(self.heard_s))) or "none",
