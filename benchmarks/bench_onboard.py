@@ -14,10 +14,11 @@ up and shutdown left out) and its peak resident memory (VmHWM). Printed and writ
 node, CPU-s per flight second and peak MB, and the bridge's
 (mavlink_node) CPU against residual_node's (the aim: at most a quarter). sim_node and
 autopilot_node stand for the aircraft: they do not run on the companion computer. The
-simulator runs at node_graph.LINK_REAL_TIME_FACTOR times real time, so the link's rates per
-wall second are that many times an aircraft's: the figures per flight second are what an
-aircraft's companion computer would spend, its timers' idle polling aside (mavlink_node reads
-the link every 5 ms of wall time, at most 200 reads a second whatever the rate).
+simulator runs at the stack's node_graph.LINK_REAL_TIME_FACTOR times real time, so the
+link's rates per wall second are that many times an aircraft's: the figures per flight
+second are what an aircraft's companion computer would spend, its timers' idle polling
+aside (mavlink_node reads the link every 5 ms of wall time, at most 200 reads a second
+whatever the rate).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import threading
 import time
 from pathlib import Path
 
+from uav_fault_estimator.chain import node_graph
 from uav_fault_estimator.chain.demo_run import EXIT_TARGET_MISSED
 from uav_sim.scenario import default_scenario_path
 
@@ -129,7 +131,8 @@ def fly(scenario: Path, stack: str, duration_s: float, out: Path) -> dict[str, d
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("scenario", nargs="?", type=Path, default=default_scenario_path())
-    parser.add_argument("--stack", choices=("ardupilot", "px4"), default="ardupilot")
+    parser.add_argument("--stack", choices=tuple(node_graph.LINK_REAL_TIME_FACTOR),
+                        default="ardupilot")
     parser.add_argument("--duration", type=float, default=120.0, metavar="S")
     parser.add_argument("--json", type=Path, help="also write the figures here")
     arguments = parser.parse_args()

@@ -545,7 +545,8 @@ def main(runs_dir: Path) -> int:
     parser.add_argument("--model-calibration", type=Path, metavar="MODEL.yaml",
                         help="the models' calibration (scripts/calibrate_model.py) for every "
                         "vehicle")
-    parser.add_argument("--via-mavlink", choices=("ardupilot", "px4"), default="",
+    parser.add_argument("--via-mavlink", choices=tuple(node_graph.LINK_REAL_TIME_FACTOR),
+                        default="",
                         help="the flight through an autopilot's MAVLink link: the simulator "
                         "as this stack, the chain on mavlink_node (one scenario)")
     arguments = parser.parse_args()

@@ -55,9 +55,12 @@ TRUTH_TOPICS = ("faults/seeded", "wind/true")
 LINK_HOST = "127.0.0.1"
 # The link has no flow control: a simulator as fast as its subscribers acknowledge sends
 # its samples in bursts, and a listener held up for a moment loses the datagrams beyond its
-# socket's buffer (the default flight at about 16 times real time lost 8 s of it). At this
-# pace the bursts are one sample's [simulated s per wall s].
-LINK_REAL_TIME_FACTOR = 10.0
+# socket's buffer (the default flight at about 16 times real time lost 8 s of it). Paced,
+# the bursts are one sample's, and mavlink_node keeps up on two cores: ArduPlane's advised
+# streams (about 100 messages per flight second) at 10 times real time; PX4's onboard set
+# (about 270) lost 30 s of the default flight at 10, so it flies at 4
+# [simulated s per wall s].
+LINK_REAL_TIME_FACTOR = {"ardupilot": 10.0, "px4": 4.0}
 
 
 def vehicle_namespaces(count: int, namespace: str = "") -> list[str]:
@@ -122,16 +125,17 @@ def played_autopilot_ros_args(executable: str, stack: str, port: int,
                               fuel_mass_kg: float, vehicle: str) -> list[str]:
     """demo.sh --via-mavlink's ROS arguments, beyond node_ros_args', of the simulator, the
     autopilot it plays (stack: ardupilot or px4) and mavlink_node, linked on UDP port `port`
-    of loopback (PLAYED_AUTOPILOT_NS), the simulator at LINK_REAL_TIME_FACTOR. mavlink_node
-    stamps with the boot time itself (the simulation time: no offset measured at the first
-    message), takes the fuel the simulated aircraft carries, fuel_mass_kg [kg], as its
-    fuel mass (no autopilot streams it), and reads the outputs with the vehicle's simulated
-    airframe (the one autopilot_node writes them with). residual_node: link_residual_ros_args.
+    of loopback (PLAYED_AUTOPILOT_NS), the simulator at the stack's LINK_REAL_TIME_FACTOR.
+    mavlink_node stamps with the boot time itself (the simulation time: no offset measured
+    at the first message), takes the fuel the simulated aircraft carries, fuel_mass_kg [kg],
+    as its fuel mass (no autopilot streams it), and reads the outputs with the vehicle's
+    simulated airframe (the one autopilot_node writes them with). residual_node:
+    link_residual_ros_args.
     """
     namespace = ["-r", f"__ns:={PLAYED_AUTOPILOT_NS}"]
     truth = [arg for topic in TRUTH_TOPICS for arg in ("-r", f"{topic}:=/{topic}")]
     if executable == SIMULATOR:
-        return [*namespace, *truth, "-p", f"real_time_factor:={LINK_REAL_TIME_FACTOR!r}"]
+        return [*namespace, *truth, "-p", f"real_time_factor:={LINK_REAL_TIME_FACTOR[stack]!r}"]
     if executable == AUTOPILOT:
         return [*namespace, *truth, "-p", f"connection:=udpout:{LINK_HOST}:{port}",
                 "-p", f"stack:={stack}"]
