@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers.repo import REPO_ROOT
+from uav_common.loopback import free_udp_port
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
@@ -28,7 +29,6 @@ ALFA_FLIGHTS = Path(os.environ.get("ALFA_FLIGHTS", "/work/shared/alfa/flights"))
 FLIGHTS = ("carbonZ_2018-07-18-16-37-39_1_no_failure",  # 30 s
            "carbonZ_2018-09-11-15-05-11_1_elevator_failure")  # 76 s, alarms after the onset
 SPEED = 10.0
-PORT = 14631
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +50,7 @@ def calibration_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_a_flight_streamed_live_gives_the_offline_link_alarms(
         flight, calibration_file, graph, start_process):
     folder = ALFA_FLIGHTS / flight
+    port = free_udp_port()
     calibration = read_calibration(str(calibration_file), "carbon_z_alfa")
     offline = link_alarms(calibration, link_flight(folder, REPO_ROOT / AIRFRAME), 0.01)
     topics = graph.subscribe({"/faults/alarm": FaultAlarm, "/residuals": Residuals},
@@ -57,7 +58,7 @@ def test_a_flight_streamed_live_gives_the_offline_link_alarms(
     ages = {ATTITUDE: "attitude_max_age_s", POSITION: "position_max_age_s",
             OUTPUTS: "outputs_max_age_s"}
     start_process(ros2_run_argv("uav_mavlink", "mavlink_node", ros_args=[
-        "-p", f"connection:=udpin:127.0.0.1:{PORT}", "-p", "vehicle:=carbon_z",
+        "-p", f"connection:=udpin:127.0.0.1:{port}", "-p", "vehicle:=carbon_z",
         "-p", f"airframe:={REPO_ROOT / AIRFRAME}",
         *(arg for stream, name in ages.items() for arg in ("-p", f"{name}:={MAX_AGE_S[stream]}"))
     ]), "mavlink_node")
@@ -72,7 +73,7 @@ def test_a_flight_streamed_live_gives_the_offline_link_alarms(
                           lambda topic=topic, count=count:
                           graph.node.count_subscribers(topic) >= count, 30)
     streamer = start_process(ros2_run_argv("uav_mavlink", "log_streamer", arguments=[
-        str(folder), "--connection", f"udpout:127.0.0.1:{PORT}", "--speed", str(SPEED)]),
+        str(folder), "--connection", f"udpout:127.0.0.1:{port}", "--speed", str(SPEED)]),
         "log_streamer")
     assert streamer.wait(timeout_s=30) == 0, streamer.output()
     alarms = topics["/faults/alarm"]

@@ -14,8 +14,8 @@ import socket
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import latest_values
-from helpers.udp_ports import free_udp_port
 from uav_common.channels import DETECTION_THRESHOLD_PCT, PAPER_FAULT_NAMES
+from uav_common.loopback import free_udp_port
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, FaultAlarm, FaultEstimate
