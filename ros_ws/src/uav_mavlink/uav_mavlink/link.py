@@ -12,6 +12,7 @@ aircraft from this package.
 from __future__ import annotations
 
 import os
+import socket
 from typing import Any
 
 # pymavlink reads MAVLINK20 when mavutil is imported: set before that import.
@@ -24,6 +25,11 @@ ONBOARD_COMPONENT = mavutil.mavlink.MAV_COMP_ID_ONBOARD_COMPUTER  # 191
 # What the link may send: its own heartbeat, parameter reads, and messages for the ground
 # station's screen. Nothing that commands the aircraft.
 SENT_TYPES = frozenset({"HEARTBEAT", "PARAM_REQUEST_READ", "STATUSTEXT", "NAMED_VALUE_FLOAT"})
+# A UDP link has no flow control: while the node is held up, datagrams beyond its socket's
+# receive buffer are lost. The kernel's usual default (208 KiB, counted per datagram with
+# its overhead) holds a few hundred of MAVLink's small datagrams, under a second of PX4's
+# onboard streams; this asks for many seconds (the kernel caps it at net.core.rmem_max).
+RECEIVE_BUFFER_BYTES = 4 * 1024 * 1024
 AUTOPILOTS = {mavutil.mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA: "ArduPilot",
               mavutil.mavlink.MAV_AUTOPILOT_PX4: "PX4"}
 
@@ -34,11 +40,13 @@ class ReadOnlyLinkError(RuntimeError):
 
 def open_link(connection: str, source_system: int) -> Any:
     """The pymavlink connection (mavutil.mavfile) for `connection`, sending as
-    (source_system, ONBOARD_COMPONENT) and only SENT_TYPES. OSError or ValueError when it
-    cannot be opened."""
+    (source_system, ONBOARD_COMPONENT) and only SENT_TYPES, a UDP link with a receive buffer
+    of RECEIVE_BUFFER_BYTES. OSError or ValueError when it cannot be opened."""
     link = mavutil.mavlink_connection(connection, source_system=source_system,
                                       source_component=ONBOARD_COMPONENT, dialect=DIALECT,
                                       robust_parsing=True, autoreconnect=False)
+    if isinstance(link, mavutil.mavudp):
+        link.port.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER_BYTES)
     send = link.mav.send
 
     def guarded_send(message: Any, *args: Any, **kwargs: Any) -> None:
