@@ -39,6 +39,7 @@ VEHICLE_FILE = "vehicle.yaml"
 NOISE_FILE = "residual_noise.yaml"
 DETECTOR_CALIBRATION_FILE = "detector_calibration.yaml"
 AIRFRAMES = "airframes"  # the folder of its airframe files
+CALIBRATION_PLAN = "calibration_plan"  # its folder of calibration flights
 MAX_VEHICLE_BYTES = 16 * 1024
 # The FCS outputs whose range is the deflection at a command of 1 (docs/aircraft.md).
 SURFACE_POSITIONS = ("fcs/elevator-pos-rad", "fcs/aileron-pos-rad", "fcs/rudder-pos-rad")
@@ -119,6 +120,12 @@ class Vehicle:
     def noise_file(self) -> Path:
         """The estimator's residual noise model of this aircraft."""
         return self.folder / NOISE_FILE
+
+    @property
+    def calibration_plan_files(self) -> list[Path]:
+        """Its calibration plan: the scenario files of the flights that calibrate its model
+        (system-identification manoeuvres; docs/model_calibration.md), in name order."""
+        return sorted((self.folder / CALIBRATION_PLAN).glob("*.yaml"))
 
     @property
     def airframe_files(self) -> dict[str, Path]:

@@ -10,6 +10,10 @@ the trim, so that straight and level flight needs no correction:
     throttle  = throttle_trim + PI(V_cmd - V)                  airspeed hold on throttle
     delta_a   = k_phi (phi - phi_cmd) + k_p p                  roll from the guidance
     delta_r   = -k_beta beta                                   turn coordination
+
+A system-identification manoeuvre (uav_sim.manoeuvres) adds its input to a command (phi_cmd,
+theta_cmd, a sideslip command beta_cmd in the coordination loop, a rate held by a damping
+term: k_p (p - p_cmd), k_q (q - q_cmd)) or to an output after the loops.
 """
 
 from __future__ import annotations
@@ -18,6 +22,8 @@ from dataclasses import dataclass
 
 from uav_aircraft.trim import Trim
 from uav_aircraft.vehicles import AutopilotGains
+
+from uav_sim.manoeuvres import NO_EXCITATION, Excitation
 
 
 def clamp(value: float, low: float, high: float) -> float:
@@ -92,11 +98,13 @@ class Autopilot:
         )
         self.airspeed_hold = PI(g.airspeed_p_permps, g.airspeed_i_permps_s, 0.0, 1.0)
 
-    def update(self, state: FlightState, roll_cmd_rad: float, dt_s: float) -> SurfaceCommands:
-        """Surface and throttle commands for one control period dt_s [s]."""
+    def update(self, state: FlightState, roll_cmd_rad: float, dt_s: float,
+               added: Excitation = NO_EXCITATION) -> SurfaceCommands:
+        """Surface and throttle commands for one control period dt_s [s], with what a
+        manoeuvre adds."""
         g = self.gains
         p, q, _ = state.body_rates_radps
-        pitch_cmd_rad = self.altitude_hold.update(
+        pitch_cmd_rad = added.pitch_rad + self.altitude_hold.update(
             self.altitude_cmd_m - state.altitude_m,
             self.trim.alpha_rad - g.climb_rate_d_radspm * state.climb_rate_mps,
             dt_s,
@@ -104,14 +112,16 @@ class Autopilot:
         elevator_rad = (
             self.trim.elevator_rad
             + g.pitch_p * (state.pitch_rad - pitch_cmd_rad)
-            + g.pitch_rate_d_s * q
+            + g.pitch_rate_d_s * (q - added.pitch_rate_radps)
+            + added.elevator_rad
         )
-        throttle = self.airspeed_hold.update(
+        throttle = clamp(self.airspeed_hold.update(
             self.airspeed_cmd_mps - state.airspeed_mps, self.trim.throttle, dt_s
-        )
-        roll_cmd_rad = clamp(roll_cmd_rad, -g.roll_limit_rad, g.roll_limit_rad)
-        aileron_rad = g.roll_p * (state.roll_rad - roll_cmd_rad) + g.roll_rate_d_s * p
-        rudder_rad = -g.sideslip_p * state.sideslip_rad
+        ) + added.throttle, 0.0, 1.0)
+        roll_cmd_rad = clamp(roll_cmd_rad + added.roll_rad, -g.roll_limit_rad, g.roll_limit_rad)
+        aileron_rad = (g.roll_p * (state.roll_rad - roll_cmd_rad)
+                       + g.roll_rate_d_s * (p - added.roll_rate_radps) + added.aileron_rad)
+        rudder_rad = -g.sideslip_p * (state.sideslip_rad - added.sideslip_rad) + added.rudder_rad
         limit = self.surface_limit_rad
         return SurfaceCommands(
             elevator_rad=clamp(elevator_rad, -limit, limit),

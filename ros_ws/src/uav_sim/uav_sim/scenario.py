@@ -3,7 +3,8 @@
 A scenario names the flight (start, waypoints, duration), the vehicle flown and modelled
 (uav_aircraft.vehicles), the wind and turbulence, the
 sensors on board, how the flown aircraft differs from the model (uav_aircraft.flown_aircraft),
-the faults seeded into the aircraft and the sensor dropouts of the state and air-data
+the faults seeded into the aircraft, the system-identification manoeuvres the autopilot
+flies (uav_sim.manoeuvres) and the sensor dropouts of the state and air-data
 streams. Loading is
 strict: an unknown or missing key, a wrong type or an impossible value stops with a
 ScenarioError naming the file and the key, before anything starts.
@@ -33,6 +34,15 @@ from uav_common.channels import (
 )
 from uav_common.strict_yaml import FileKind, Reader, is_number, load_yaml
 
+from uav_sim.manoeuvres import (
+    AXES,
+    AXIS_LEVELS,
+    KINDS,
+    MAX_MAGNITUDE,
+    MAX_SWEEP_HZ,
+    SWEEPS,
+    Manoeuvre,
+)
 from uav_sim.mpc_guidance import MpcSettings
 from uav_sim.paths import scenarios_dir
 
@@ -158,6 +168,7 @@ class Scenario:
     faults: tuple[SeededFault, ...] = ()
     sensor_dropouts: tuple[SensorDropout, ...] = ()
     setpoints: tuple[SetpointChange, ...] = ()
+    manoeuvres: tuple[Manoeuvre, ...] = ()
     estimator: dict[str, Any] = field(default_factory=dict)
     path: Path | None = None
 
@@ -347,6 +358,54 @@ def _setpoint(reader: Reader) -> SetpointChange:
     )
 
 
+_SWEEP_KEYS = {"f_start_hz", "f_stop_hz", "duration_s", "fade_in_s", "fade_out_s"}
+
+
+def _manoeuvre(reader: Reader) -> Manoeuvre:
+    """A `manoeuvres` entry (uav_sim.manoeuvres): start_s, kind, axis, level (throttle's
+    may be left out: surface), magnitude, and a sweep's band, duration and fades or the
+    steps' step_s."""
+    data = reader.data
+    if data.get("kind") == 3211 and type(data["kind"]) is int:  # YAML reads 3211 unquoted
+        data["kind"] = "3211"
+    kind = reader.choice("kind", KINDS) if "kind" in data else None
+    shape = _SWEEP_KEYS if kind in SWEEPS else {"step_s"}
+    reader.check_keys({"start_s", "kind", "axis", "magnitude"} | shape, {"level"})
+    axis = reader.choice("axis", AXES)
+    level = reader.choice("level", AXIS_LEVELS[axis]) if "level" in data else "surface"
+    if "level" not in data and axis != "throttle":
+        reader.fail(f"missing required key '{reader.key('level')}' (one of "
+                    f"{', '.join(AXIS_LEVELS[axis])})")
+    numbers = {name: reader.number(name, positive=True) for name in shape - {"fade_in_s",
+                                                                           "fade_out_s"}}
+    manoeuvre = Manoeuvre(
+        start_s=reader.number("start_s", minimum=0.0), kind=kind, axis=axis, level=level,
+        magnitude=reader.number("magnitude", positive=True, maximum=MAX_MAGNITUDE[level]),
+        **numbers, **{name: reader.number(name, minimum=0.0)
+                      for name in ("fade_in_s", "fade_out_s") if name in shape})
+    if kind in SWEEPS:
+        if not manoeuvre.f_start_hz <= manoeuvre.f_stop_hz <= MAX_SWEEP_HZ:
+            reader.fail(f"'{reader.key('f_stop_hz')}' must be from f_start_hz to "
+                        f"{MAX_SWEEP_HZ:g} Hz, got {manoeuvre.f_stop_hz!r}")
+        if manoeuvre.fade_in_s + manoeuvre.fade_out_s > manoeuvre.duration_s:
+            reader.fail(f"'{reader.key('fade_in_s')}' and fade_out_s together exceed "
+                        "duration_s")
+    return manoeuvre
+
+
+def _manoeuvres(reader: Reader) -> tuple[Manoeuvre, ...]:
+    """The `manoeuvres` list, in start order; two on one axis at one time are refused."""
+    manoeuvres = [_manoeuvre(reader.element("manoeuvres", index))
+                  for index in range(len(reader.items("manoeuvres")))]
+    for index, later in enumerate(manoeuvres):
+        for earlier_index, earlier in enumerate(manoeuvres[:index]):
+            if (earlier.axis == later.axis and earlier.start_s < later.end_s
+                    and later.start_s < earlier.end_s):
+                reader.fail(f"'manoeuvres[{index}]' overlaps 'manoeuvres[{earlier_index}]' on "
+                            f"the {later.axis} axis ({earlier.start_s:g}-{earlier.end_s:g} s)")
+    return tuple(sorted(manoeuvres, key=lambda manoeuvre: manoeuvre.start_s))
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and check a scenario file; raises ScenarioError with one clear message."""
     path = Path(path)
@@ -355,7 +414,7 @@ def load_scenario(path: str | Path) -> Scenario:
     reader.check_keys(
         {"name", "duration_s", "seed", "initial", "waypoints_ne_m", "wind"},
         {"sensors", "guidance", "vehicle", "aircraft", "faults", "sensor_dropouts",
-         "setpoints", "estimator"},
+         "setpoints", "manoeuvres", "estimator"},
     )
     if reader.text("name") in (".", "..") or any(c in data["name"] for c in "/\\\0"):
         # demo.sh's default output folder is runs/<name>/
@@ -393,6 +452,7 @@ def load_scenario(path: str | Path) -> Scenario:
         sensor_dropouts=dropouts,
         setpoints=tuple(_setpoint(reader.element("setpoints", index))
                         for index in range(len(reader.items("setpoints")))),
+        manoeuvres=_manoeuvres(reader),
         estimator=dict(estimator),
         path=path,
     )

@@ -37,6 +37,7 @@ from uav_common.channels import (
 
 from uav_sim.autopilot import Autopilot, FlightState
 from uav_sim.guidance import WaypointGuidance
+from uav_sim.manoeuvres import excitation
 from uav_sim.mpc_guidance import MpcGuidance
 from uav_sim.scenario import Scenario
 from uav_sim.sensors import SensorModel
@@ -211,13 +212,15 @@ class Simulation:
                     self._faults_set = faults_pct
                 if self.turbulence is not None:
                     self._gusts.set(*self.turbulence.step())
-                self._control(CONTROL_STEPS * JSBSIM_DT_S)
+                self._control(CONTROL_STEPS * JSBSIM_DT_S, time_s)
             fdm.run()
         self.sample_count += 1
         self._latest = self._sample()
         return self._latest
 
-    def _control(self, dt_s: float) -> None:
+    def _control(self, dt_s: float, time_s: float) -> None:
+        """One autopilot period of dt_s [s] at time_s [s] (a manoeuvre's input changes at
+        the control rate, not the sensor rate)."""
         (altitude_m, down_fps, airspeed_fps, roll_rad, pitch_rad, sideslip_rad, p_radps, q_radps,
          r_radps, north_fps, east_fps, latitude_rad, longitude_rad) = [
             read() for read in self._reads]
@@ -237,7 +240,8 @@ class Simulation:
         )
         self.autopilot.airspeed_cmd_mps, self.autopilot.altitude_cmd_m = (
             self.scenario.commanded(self.time_s))
-        commands = self.autopilot.update(state, roll_cmd_rad, dt_s)
+        commands = self.autopilot.update(state, roll_cmd_rad, dt_s, excitation(
+            self.scenario.manoeuvres, time_s, self.vehicle.surface_limit_rad))
         self._setpoints = np.array([commands.roll_cmd_rad, commands.pitch_cmd_rad, math.nan])
         limit = self.vehicle.surface_limit_rad
         set_elevator, set_aileron, set_rudder, set_throttle = self._writes
