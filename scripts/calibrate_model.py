@@ -3,23 +3,31 @@
 
     python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--vehicle aerosonde]
         [--parameters A,B,...] [--measured AIRCRAFT.yaml] [--strict]
+        [--airframe FILE] [--fuel-mass-kg KG]
 
 RECORDING: a rosbag2 folder (demo.sh's DIR/bag, bringup's or recorder_node's) with /state,
 /controls, /wind/filtered and, where the aircraft has them, /air_data of a flight with no
-fault, flown by the vehicle. Identifies the model's parameters (default:
-model_parameters.DEFAULT_PARAMETERS; any aerodynamic coefficient of the vehicle's XML by name
-or all of them as `coefficients`,
-mass_scale, thrust_scale, inertia_{x,y,z}_scale, cg_{x,y,z}_cm, airspeed_scale,
-angle_of_attack_deg, sideslip_deg) so that the models fit the flights' accelerations
-(estimation/model_calibration.py), prints
-each with its posterior deviation and the pairs the flights cannot separate, then checks the fit
-(estimation/calibration_check.py: the weighted residual, parameters pushed beyond two prior
-deviations, a residual channel with a structured remainder in a flight regime) and prints a
-WARN line for each finding, naming what it suggests; and writes MODEL.yaml for
-residual_node's model_calibration_file (demo.sh --model-calibration MODEL.yaml) and, beside
-it, MODEL.noise.yaml: the residual noise of the calibrated model on the same flights, per
-sensor suite, for mhe_node's noise_calibration_file (calibrate_estimator.py's file, made
-from these flights instead of simulated ones; MODEL.yaml names it, and demo.sh passes both).
+fault, flown by the vehicle: best the flights of the vehicle's calibration plan (its
+aircraft folder's calibration_plan/: system-identification manoeuvres). Or the autopilot's
+own log of such a flight: an ArduPilot DataFlash log (.bin) or a PX4 ULog (.ulg)
+(flight_logs/calibration_logs.py: which message gives which column), its PWM outputs mapped
+to the surfaces by the airframe FILE (default: the vehicle's only airframe file), with the
+fuel mass KG on board (no autopilot logs it; default 0, an electric aircraft). Identifies the
+model's parameters (default: model_parameters.DEFAULT_PARAMETERS; any aerodynamic
+coefficient of the vehicle's XML by name or all of them as `coefficients`, mass_scale,
+thrust_scale, inertia_{x,y,z}_scale, cg_{x,y,z}_cm, airspeed_scale, angle_of_attack_deg,
+sideslip_deg) so that the models fit the flights' accelerations
+(estimation/model_calibration.py); prints each with its posterior deviation and the flights
+that inform it, and the pairs the flights cannot separate with the manoeuvres that would
+(estimation/identifiability.py); then checks the fit (estimation/calibration_check.py: the
+weighted residual, parameters pushed beyond two prior deviations, a residual channel with a
+structured remainder in a flight regime) and prints a WARN line for each finding, naming
+what it suggests; and writes MODEL.yaml for residual_node's model_calibration_file (demo.sh
+--model-calibration MODEL.yaml) and, beside it, MODEL.noise.yaml: the residual noise of the
+calibrated model on the same flights, per sensor suite (a suite none of them flew, such as
+the air data of logs without vanes, the shipped one's), for mhe_node's
+noise_calibration_file (calibrate_estimator.py's file, made from these flights instead of
+simulated ones; MODEL.yaml names it, and demo.sh passes both).
 
 AIRCRAFT.yaml: what was measured of the aircraft on the ground, as a scenario's `aircraft:`
 block under the key `aircraft` (say cg_offset_m from a balance, inertia_scale from a
@@ -39,6 +47,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+from uav_aircraft.airframe import load_airframe
 from uav_aircraft.flown_aircraft import NOMINAL
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 from uav_fault_estimator.campaigns.campaign import (
@@ -48,11 +58,24 @@ from uav_fault_estimator.campaigns.campaign import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.estimation.calibration_check import check_calibration
-from uav_fault_estimator.estimation.model_calibration import CalibrationError, calibrate
+from uav_fault_estimator.estimation.identifiability import (
+    informing_flights,
+    separating_manoeuvres,
+)
+from uav_fault_estimator.estimation.model_calibration import (
+    CalibrationError,
+    SensorFlight,
+    calibrate,
+)
 from uav_fault_estimator.estimation.model_file import calibration_dict, load_measured_aircraft
 from uav_fault_estimator.estimation.model_parameters import DEFAULT_PARAMETERS, parameter_list
-from uav_fault_estimator.estimation.noise_model import fit_noise, load_noise_calibration
+from uav_fault_estimator.estimation.noise_model import (
+    NoiseCalibration,
+    fit_noise,
+    load_noise_calibration,
+)
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
+from uav_fault_estimator.flight_logs.calibration_logs import LOG_SUFFIXES, sensor_flight_from_log
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,
@@ -76,6 +99,11 @@ def main() -> int:
                         help="the aircraft as measured on the ground (`aircraft:` block)")
     parser.add_argument("--strict", action="store_true",
                         help="a warning of the fit's check is an error: nothing is written")
+    parser.add_argument("--airframe", type=Path, metavar="FILE",
+                        help="the servo mapping of the logs' outputs (default: the vehicle's "
+                        "only airframe file)")
+    parser.add_argument("--fuel-mass-kg", type=float, default=0.0, metavar="KG",
+                        help="the fuel on board during the logs' flights (default: %(default)s)")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
@@ -84,8 +112,8 @@ def main() -> int:
         names = parameter_list(arguments.parameters, load_vehicle(vehicle))
         measured = (load_measured_aircraft(arguments.measured, vehicle) if arguments.measured
                     else NOMINAL)
-        typestore = project_typestore()
-        flights = [sensor_flight_from_recording(bag, typestore) for bag in arguments.recordings]
+        flights = _load_flights(arguments.recordings, vehicle, arguments.airframe,
+                                arguments.fuel_mass_kg)
     except (ValueError, RecordingError) as error:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 2
@@ -101,7 +129,7 @@ def main() -> int:
     except CalibrationError as error:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 1
-    _print_calibration(calibration)
+    _print_calibration(calibration, [f.name for f in flights])
     warnings = check_calibration(calibration, flights, noise)
     for warning in warnings:
         print(f"WARN {warning.text}")
@@ -115,8 +143,8 @@ def main() -> int:
         f.name for f in flights)
     write_calibration(noise_path, f"# Written by scripts/calibrate_model.py: residuals of the "
                       f"calibrated model ({arguments.out.name}) on\n# {sources}.\n",
-                      fit_noise(calibration.residuals).to_dict(vehicle), "the same flights",
-                      time.monotonic() - started)
+                      _fitted_noise(calibration.residuals, noise).to_dict(vehicle),
+                      "the same flights", time.monotonic() - started)
     write_calibration(arguments.out, f"# Written by scripts/calibrate_model.py from {sources}."
                       "\n# For residual_node's model_calibration_file.\n",
                       calibration_dict(calibration, vehicle, [f.name for f in flights],
@@ -125,19 +153,53 @@ def main() -> int:
     return 0
 
 
-def _print_calibration(calibration) -> None:
-    """Each parameter with its posterior deviation, and the worst-correlated pairs."""
-    print(f"{'parameter':<22}{'value':>9}{'+-':>8}  unit  (prior +- deviation)")
-    for name, unit, value, posterior, mean, prior in zip(
+def _load_flights(recordings: list[Path], vehicle: str, airframe: Path | None,
+                  fuel_mass_kg: float) -> list[SensorFlight]:
+    """Each RECORDING as a calibration reads it: an autopilot's log (.bin, .ulg) through the
+    airframe file (None: the vehicle's only one) with fuel_mass_kg [kg] on board, else a
+    rosbag2 folder. ValueError or RecordingError (one line) for one that cannot be read."""
+    logs = [path for path in recordings if path.suffix.lower() in LOG_SUFFIXES]
+    servo_map = load_airframe(airframe or load_vehicle(vehicle).only_airframe_file()) \
+        if logs else None
+    typestore = project_typestore()
+    return [sensor_flight_from_log(path, servo_map, fuel_mass_kg=fuel_mass_kg) if path in logs
+            else sensor_flight_from_recording(path, typestore) for path in recordings]
+
+
+def _fitted_noise(residuals: dict[str, list[np.ndarray]],
+                  shipped: NoiseCalibration) -> NoiseCalibration:
+    """fit_noise of the calibrated model's residuals (per suite, each flight's (K, 6)) for
+    each suite the flights flew; a suite none flew keeps the shipped noise model's values (an
+    autopilot's log has no vanes: its flights fly the wind estimate alone), so that mhe_node
+    takes the file."""
+    fitted = fit_noise({suite: flights for suite, flights in residuals.items()
+                        if sum(len(flight) for flight in flights)})
+    return NoiseCalibration({**shipped.variances, **fitted.variances},
+                            {**shipped.correlations, **fitted.correlations})
+
+
+def _print_calibration(calibration, flight_names: list[str]) -> None:
+    """Each parameter with its posterior deviation and the flights that inform it (by
+    number), the worst-correlated pairs, and for those hardly separated the manoeuvres that
+    would separate them."""
+    for number, name in enumerate(flight_names, 1):
+        print(f"flight {number}: {name}")
+    informed = informing_flights(calibration.flight_posterior_std, calibration.prior_std,
+                                 [str(number) for number in range(1, len(flight_names) + 1)])
+    print(f"{'parameter':<22}{'value':>9}{'+-':>8}  unit  (prior +- deviation)  informed by")
+    for name, unit, value, posterior, mean, prior, flights in zip(
             calibration.names, calibration.units, calibration.values, calibration.posterior_std,
-            calibration.prior_mean, calibration.prior_std, strict=True):
-        print(f"{name:<22}{value:>9.3f}{posterior:>8.3f}  {unit:<4}  ({mean:g} +- {prior:g})")
+            calibration.prior_mean, calibration.prior_std, informed, strict=True):
+        print(f"{name:<22}{value:>9.3f}{posterior:>8.3f}  {unit:<4}  ({mean:g} +- {prior:g})"
+              f"  {', '.join(flights) or 'no flight: its prior holds it'}")
     print(f"{calibration.steps} Gauss-Newton steps, reduced chi-square "
           f"{calibration.reduced_chi_square:.3f}")
     for first, second, value in calibration.worst_correlations():
-        verdict = ("hardly separated: the flights fix a combination of the two, the prior "
-                   "the split" if abs(value) >= INSEPARABLE else "separated")
-        print(f"  correlation {first} / {second}: {value:+.3f} ({verdict})")
+        separated = abs(value) < INSEPARABLE
+        print(f"  correlation {first} / {second}: {value:+.3f} (" + (
+            "separated)" if separated else "hardly separated: the flights fix a combination "
+            "of the two, the prior the split; to separate them fly "
+            + "; and ".join(separating_manoeuvres(first, second)) + ")"))
 
 
 if __name__ == "__main__":

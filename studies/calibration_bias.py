@@ -23,6 +23,7 @@ import dataclasses
 import json
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from uav_aircraft.flown_aircraft import NOMINAL
@@ -47,17 +48,20 @@ class BiasTask:
     seed_set: int
     parameters: tuple[str, ...]
     excite: bool = False
+    plan: tuple[Path, ...] = ()
 
 
-def flights_in(condition: str, seed_set: int, excite: bool = False) -> list[Scenario]:
+def flights_in(condition: str, seed_set: int, excite: bool = False,
+               plan: tuple[Path, ...] = ()) -> list[Scenario]:
     """The model's calibration flights of the seed set (with random_aircraft.EXCITATION
-    when excite), flown in the condition (random_aircraft.CONDITIONS)."""
-    return calibration_scenarios(NOMINAL, seed_set, excite, condition)
+    when excite; the plan's scenario files instead where given), flown in the condition
+    (random_aircraft.CONDITIONS)."""
+    return calibration_scenarios(NOMINAL, seed_set, excite, condition, plan)
 
 
 def calibrate_task(task: BiasTask) -> dict:
     """The task's calibration: per parameter its value and posterior deviation."""
-    flights = flights_in(task.condition, task.seed_set, task.excite)
+    flights = flights_in(task.condition, task.seed_set, task.excite, task.plan)
     calibration, _, _ = calibrate_scenarios(flights, task.parameters)
     return {"condition": task.condition, "seed_set": task.seed_set,
             "seeds": [s.seed for s in flights],
@@ -88,7 +92,7 @@ def main() -> int:
     parser.add_argument("--seeds", type=int, default=3, help="seed sets per condition")
     arguments = calibration_study_arguments(parser)
     parameters = arguments.parameters
-    tasks = [BiasTask(condition, seed_set, parameters, arguments.excite)
+    tasks = [BiasTask(condition, seed_set, parameters, arguments.excite, arguments.plan)
              for condition in CONDITIONS
              for seed_set in range(arguments.seeds)]
     started = time.monotonic()
@@ -104,6 +108,7 @@ def main() -> int:
         arguments.json.write_text(json.dumps({
             "seed_sets": arguments.seeds, "parameters": list(parameters),
             "excitation": EXCITATION if arguments.excite else None,
+            "calibration_plan": [path.name for path in arguments.plan] or None,
             "conditions": {name: {"turbulence": t, "sensor_noise": n}
                            for name, (t, n) in CONDITIONS.items()},
             "wall_time_s": round(time.monotonic() - started, 1),

@@ -116,10 +116,19 @@ def measured_mass_properties(aircraft: FlownAircraft, seed: int, index: int) -> 
 
 
 def calibration_scenarios(aircraft: FlownAircraft, index: int, excite: bool = False,
-                          condition: str = OWN_CONDITION) -> list[Scenario]:
+                          condition: str = OWN_CONDITION,
+                          plan: tuple[Path, ...] = ()) -> list[Scenario]:
     """The three calibration flights of aircraft number index (0: the model's own), with
-    the EXCITATION setpoint changes when excite, flown in the condition (CONDITIONS)."""
+    the EXCITATION setpoint changes when excite, flown in the condition (CONDITIONS); or
+    the plan's scenario files (a calibration plan's manoeuvre flights), each seed moved as
+    the three's."""
     turbulence, noise = CONDITIONS[condition]
+    if plan:
+        return [dataclasses.replace(
+            flight, aircraft=aircraft, seed=flight.seed + SEED_STRIDE * index,
+            wind=dataclasses.replace(flight.wind, turbulence=turbulence),
+            sensors=dataclasses.replace(flight.sensors, noise=noise))
+            for flight in map(load_scenario, plan)]
     base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
     base = dataclasses.replace(base, wind=dataclasses.replace(base.wind, turbulence=turbulence),
                                sensors=dataclasses.replace(base.sensors, noise=noise))
@@ -163,6 +172,7 @@ class AircraftTask:
     measured: FlownAircraft = NOMINAL
     excite: bool = False
     condition: str = OWN_CONDITION
+    plan: tuple[Path, ...] = ()
 
 
 def calibrate_scenarios(scenarios: list[Scenario], parameters: tuple[str, ...],
@@ -181,7 +191,8 @@ def study_aircraft(task: AircraftTask) -> dict:
     """Calibrate, check, fly the test flights and judge them (the module docstring)."""
     started = time.monotonic()
     calibration, flights, noise = calibrate_scenarios(
-        calibration_scenarios(task.aircraft, task.index, task.excite, task.condition),
+        calibration_scenarios(task.aircraft, task.index, task.excite, task.condition,
+                              task.plan),
         task.parameters,
         task.measured)
     warnings = check_calibration(calibration, flights, noise)
@@ -224,15 +235,35 @@ def print_row(row: dict) -> None:
         print(f"         WARN {text}")
 
 
+PLAN_OF_THE_VEHICLE = Path("calibration_plan")  # --plan without a folder
+
+
+def plan_files(folder: Path | None, parser: argparse.ArgumentParser) -> tuple[Path, ...]:
+    """The scenario files of --plan's folder (the vehicle's own for PLAN_OF_THE_VEHICLE;
+    none without --plan); a parser error for a folder without any."""
+    if folder is None:
+        return ()
+    files = (tuple(load_vehicle().calibration_plan_files) if folder == PLAN_OF_THE_VEHICLE
+             else tuple(sorted(folder.glob("*.yaml"))))
+    if not files:
+        parser.error(f"--plan: no scenario files (*.yaml) in {folder}")
+    return files
+
+
 def calibration_study_arguments(parser: argparse.ArgumentParser) -> argparse.Namespace:
     """A calibration study's command line, parsed: the parser's own arguments, then
     --parameters (checked, as a tuple), --excite, --json FILE and the campaign's options."""
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
     parser.add_argument("--excite", action="store_true",
                         help="fly EXCITATION's setpoint changes in the calibration flights")
+    parser.add_argument("--plan", nargs="?", type=Path, const=PLAN_OF_THE_VEHICLE,
+                        metavar="DIR", help="calibrate from a calibration plan's scenario "
+                        "files (DIR; without: the vehicle's calibration_plan/) instead of the "
+                        "three ordinary flights")
     parser.add_argument("--json", type=Path)
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
+    arguments.plan = plan_files(arguments.plan, parser)
     try:
         arguments.parameters = parameter_list(arguments.parameters, load_vehicle())
     except ValueError as error:
@@ -255,13 +286,15 @@ def main() -> int:
     arguments = calibration_study_arguments(parser)
     parameters, excite = arguments.parameters, arguments.excite
     condition = arguments.calibration_condition
-    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite, condition=condition)]
+    plan = arguments.plan
+    tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite, condition=condition,
+                          plan=plan)]
     for k in range(1, arguments.count + 1):
         aircraft = drawn_aircraft(arguments.seed, k)
         measured = (measured_mass_properties(aircraft, arguments.seed, k)
                     if arguments.measured_mass_properties else NOMINAL)
         tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured, excite,
-                                  condition))
+                                  condition, plan))
     started = time.monotonic()
     with Campaign(campaign_options(arguments)) as campaign:
         rows = campaign.results(study_aircraft, tasks, "aircraft")
@@ -278,6 +311,7 @@ def main() -> int:
             "measured_mass_properties": (MEASUREMENT_ERROR if arguments.measured_mass_properties
                                          else None),
             "excitation": EXCITATION if excite else None,
+            "calibration_plan": [path.name for path in plan] or None,
             "calibration_condition": condition,
             "draw": DRAW, "targets": {"fault_free_below_pct": targets.FAULT_FREE_BELOW_PCT,
                                       "rmse_share": targets.RMSE_SHARE,

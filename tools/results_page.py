@@ -361,9 +361,12 @@ def random_aircraft(data: Mapping[str, Any]) -> list[str]:
                      f"ground (within {', '.join(f'{k} {number(v)}' for k, v in measured.items())})"
                      if measured else "nothing measured on the ground")
     condition = data.get("calibration_condition", "turbulence, sensor noise")
+    plan = data.get("calibration_plan")
+    flights = (f"the calibration plan's flights ({', '.join(plan)})" if plan
+               else "three ordinary fault-free flights at 22, 25 and 28 m/s")
     lines = [f"{data['count']} aircraft drawn with seed {data['seed']} (draw half-widths "
              f"{', '.join(f'{k} {number(v)}' for k, v in data['draw'].items())}) and the "
-             f"model's own; calibration flights in {condition}; parameters "
+             f"model's own; calibrated from {flights} in {condition}; parameters "
              f"{', '.join(data['parameters'])}; {on_the_ground}. Targets: fault-free "
              f"largest below {number(targets['fault_free_below_pct'])} %, RMS at most "
              f"{number(100 * targets['rmse_share'])} % and final within "
@@ -521,14 +524,16 @@ SECTIONS = (
             "python -m studies.random_aircraft --count 12 --calibration-condition "
             "'calm air, ideal sensors' --parameters coefficients,mass_scale,thrust_scale,"
             "cg_y_cm,airspeed_scale,angle_of_attack_deg,sideslip_deg --json "
-            "docs/random_aircraft_ideal_all.json",
+            "docs/random_aircraft_ideal_all.json && python -m studies.random_aircraft "
+            "--count 12 --plan --json docs/random_aircraft_plan.json",
             random_aircraft,
             "Aircraft drawn at random about the model, each calibrated from three fault-free "
             "flights of it and flown through the offline chain with its calibration; the "
             "calibration's own check beside whether the targets are met. The _ideal files: "
             "the same aircraft calibrated from the same flights flown in calm air with ideal "
             "sensors (the best these flights can give), with the default parameters and with "
-            "all 37 (every aerodynamic coefficient) (docs/model_calibration.md)."),
+            "all 37 (every aerodynamic coefficient); the _plan file: calibrated from the "
+            "vehicle's calibration plan instead (docs/model_calibration.md)."),
     Section("Calibration bias", "calibration_bias*.json",
             "python -m studies.calibration_bias --json docs/calibration_bias.json && "
             "python -m studies.calibration_bias --excite --json "

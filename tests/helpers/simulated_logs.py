@@ -35,6 +35,7 @@ from uav_fault_estimator.flight_logs.axes import (
     quaternions_from_euler,
     world_vectors_ned,
 )
+from uav_fault_estimator.flight_logs.log_writers import ulog_message, ulog_records
 from uav_fault_estimator.flight_logs.streams import (
     AIRSPEED,
     ATTITUDE,
@@ -187,7 +188,6 @@ ULOG_FORMATS = {
     "actuator_outputs": [("uint64_t", "timestamp"), ("uint32_t", "noutputs"),
                          ("float[16]", "output")],
 }
-_NUMPY_TYPES = {"uint64_t": "<u8", "uint32_t": "<u4", "float": "<f4"}
 
 
 def write_ulog(path: Path, truth: LogTruth) -> None:
@@ -211,44 +211,26 @@ def write_ulog(path: Path, truth: LogTruth) -> None:
     messages = []  # (timestamp [us], bytes) of every data message
     with Path(path).open("wb") as file:
         file.write(ULOG_MAGIC + bytes([ULOG_VERSION]) + struct.pack("<Q", ULOG_START_US))
-        file.write(_ulog_message(b"B", bytes(16) + bytes(24)))  # no flags, nothing appended
+        file.write(ulog_message(b"B", bytes(16) + bytes(24)))  # no flags, nothing appended
         for name, format_fields in ULOG_FORMATS.items():
             text = name + ":" + "".join(f"{kind} {field};" for kind, field in format_fields)
-            file.write(_ulog_message(b"F", text.encode()))
-        file.write(_ulog_message(b"I", _info("char[12] sys_name", b"uav_sim_log")))
+            file.write(ulog_message(b"F", text.encode()))
+        file.write(ulog_message(b"I", _info("char[12] sys_name", b"uav_sim_log")))
         for msg_id, name in enumerate(ULOG_FORMATS):
-            file.write(_ulog_message(b"A", struct.pack("<BH", 0, msg_id) + name.encode()))
+            file.write(ulog_message(b"A", struct.pack("<BH", 0, msg_id) + name.encode()))
             timestamps_us = ULOG_START_US + np.round(times_s[name] * 1e6).astype(np.uint64)
             values = [timestamps_us] + ([timestamps_us] if name == "vehicle_angular_velocity"
                                         else []) + columns[name]
-            records = _records(ULOG_FORMATS[name], values)
-            messages += [(int(t), _ulog_message(b"D", struct.pack("<H", msg_id) + record))
+            records = ulog_records(ULOG_FORMATS[name], values)
+            messages += [(int(t), ulog_message(b"D", struct.pack("<H", msg_id) + record))
                          for t, record in zip(timestamps_us, records, strict=True)]
         for _, message in sorted(messages, key=lambda m: m[0]):
             file.write(message)
 
 
-def _ulog_message(kind: bytes, payload: bytes) -> bytes:
-    """A ULog message: size (uint16), type (char), payload."""
-    return struct.pack("<H", len(payload)) + kind + payload
-
-
 def _info(key: str, value: bytes) -> bytes:
     """An info message's payload: key length, "type name", value."""
     return bytes([len(key)]) + key.encode() + value
-
-
-def _records(format_fields: list[tuple[str, str]], values: list[np.ndarray]) -> list[bytes]:
-    """Packed little-endian records of a topic, its fields' values flattened in order."""
-    dtype = []
-    for kind, field in format_fields:
-        base, _, size = kind.partition("[")
-        count = int(size.rstrip("]")) if size else 1
-        dtype += [(f"{field}{k}", _NUMPY_TYPES[base]) for k in range(count)]
-    table = np.zeros(values[0].size, dtype=dtype)
-    for (name, _), value in zip(dtype, values, strict=True):
-        table[name] = value
-    return [row.tobytes() for row in table]
 
 
 # ---- ROS 1 bag with MAVROS types -----------------------------------------------------------

@@ -18,6 +18,13 @@ from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coef
 from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import STATE_CHANNELS
 from uav_fault_estimator.chain.offline import sensor_flight
+from uav_fault_estimator.estimation.identifiability import (
+    AXES,
+    MANOEUVRE_FOR_AXIS,
+    informing_flights,
+    parameter_axis,
+    separating_manoeuvres,
+)
 from uav_fault_estimator.estimation.model_calibration import calibrate
 from uav_fault_estimator.estimation.model_file import (
     ModelCalibrationError,
@@ -25,6 +32,7 @@ from uav_fault_estimator.estimation.model_file import (
     load_model_calibration,
 )
 from uav_fault_estimator.estimation.model_parameters import (
+    AIRCRAFT_PARAMETERS,
     DEFAULT_PARAMETERS,
     changed,
     model_parameter,
@@ -38,6 +46,7 @@ from uav_fault_estimator.recording.project_bag import (
     project_typestore,
     sensor_flight_from_recording,
 )
+from uav_sim.manoeuvres import Manoeuvre
 from uav_sim.scenario import SensorSuite, default_scenario_path, load_scenario
 
 # A flown aircraft with more drag, a stiffer pitch and a misaligned alpha vane, and its CG
@@ -201,3 +210,29 @@ def test_calibrate_model_says_what_is_wrong_in_one_line(tmp_path, arguments, wor
     assert words in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "m.yaml").exists()
 
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("vehicle", ["aerosonde", "carbon_z"])
+def test_every_parameter_has_an_axis_and_a_manoeuvre(vehicle):
+    names = parameter_list("coefficients", load_vehicle(vehicle)) + AIRCRAFT_PARAMETERS
+    assert {parameter_axis(name) for name in names} == set(AXES)
+    assert separating_manoeuvres("Cmalpha", "Cmde") == [MANOEUVRE_FOR_AXIS["pitch"]]
+    assert separating_manoeuvres("mass_scale", "Cnr") == [MANOEUVRE_FOR_AXIS["throttle"],
+                                                          MANOEUVRE_FOR_AXIS["yaw"]]
+
+
+@pytest.mark.timeout(120)
+def test_steady_sideslips_inform_the_yaw_stiffness_a_level_leg_does_not():
+    """Two calm 60 s legs of the model's own aircraft, one with a sideslip doublet (12 deg,
+    12 s each way): the yaw stiffness is informed by that one only."""
+    leg = dataclasses.replace(calm(load_scenario(default_scenario_path()), 60.0),
+                              sensors=SensorSuite(air_data=True, noise=False))
+    sideslips = Manoeuvre(10.0, "doublet", "yaw", "attitude", 12.0, step_s=12.0)
+    flights = [sensor_flight(leg),
+               sensor_flight(dataclasses.replace(leg, manoeuvres=(sideslips,)))]
+    calibration = calibrate(flights, ("Cnbeta", "Cnr"), ResidualSettings(),
+                            load_noise_calibration(), log=lambda line: None)
+    informed = informing_flights(calibration.flight_posterior_std, calibration.prior_std,
+                                 ["level", "sideslips"])
+    assert informed[0] == ["sideslips"], calibration.flight_posterior_std

@@ -59,6 +59,11 @@ CONTROL_CHANNELS: tuple[str, ...] = (
     "ignition",
 )
 CONTROL_UNITS: tuple[str, ...] = ("rad", "rad", "rad", "rad", "", "", "")
+# The controls no autopilot's link or log carries, by CONTROL_CHANNELS index: the flap
+# retracted (none mapped), mixture and ignition 1 (the engine runs).
+UNREPORTED_CONTROLS: dict[int, float] = {CONTROL_CHANNELS.index("flap"): 0.0,
+                                         CONTROL_CHANNELS.index("mixture"): 1.0,
+                                         CONTROL_CHANNELS.index("ignition"): 1.0}
 
 # Percent change of the named coefficient (docs/design.md); the first four are the paper's.
 # What the estimator's model copies can carry.

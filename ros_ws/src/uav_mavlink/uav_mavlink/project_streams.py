@@ -20,15 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from uav_aircraft.airframe import CONTROLS, MAX_OUTPUTS, Airframe, control_values
-from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS
+from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, UNREPORTED_CONTROLS
 from uav_common.filters import LowPass
 
 from uav_mavlink.sample_assembly import Sample
 
 _CONTROL_INDEX = [CONTROL_CHANNELS.index(name) for name in CONTROLS]
-_FIXED_CONTROLS = {CONTROL_CHANNELS.index("flap"): 0.0,
-                   CONTROL_CHANNELS.index("mixture"): 1.0,
-                   CONTROL_CHANNELS.index("ignition"): 1.0}
 _AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
@@ -61,7 +58,7 @@ class StreamConversion:
         controls[_CONTROL_INDEX] = control_values(
             self.airframe, lambda output: sample.outputs_us[None, output - 1],
             range(1, MAX_OUTPUTS + 1), 1)[0]
-        for index, value in _FIXED_CONTROLS.items():
+        for index, value in UNREPORTED_CONTROLS.items():
             controls[index] = value
         air_data = np.full(len(AIR_DATA_CHANNELS), math.nan)
         air_data[_AIRSPEED] = sample.airspeed_mps

@@ -178,9 +178,10 @@ class ModelCalibration:
     """A calibrated model: the aircraft its copies load, and per parameter (names order) its
     unit, value, prior mean (its measured value, 0 unless measured), prior deviation and
     posterior deviation [its unit], the posterior correlations
-    (n, n), the Gauss-Newton steps taken, the fit's reduced chi-square, and the residuals per
-    suite and flight at the calibrated model (for the noise calibration) with their times
-    (for the fit's check, calibration_check.py)."""
+    (n, n), the Gauss-Newton steps taken, the fit's reduced chi-square, the posterior
+    deviation each flight alone (with the prior) gives (flights, n) [its unit]: which flights
+    inform which parameter, and the residuals per suite and flight at the calibrated model
+    (for the noise calibration) with their times (for the fit's check, calibration_check.py)."""
 
     aircraft: FlownAircraft
     names: tuple[str, ...]
@@ -192,6 +193,7 @@ class ModelCalibration:
     correlations: np.ndarray
     steps: int
     reduced_chi_square: float
+    flight_posterior_std: np.ndarray
     residuals: dict[str, list[np.ndarray]]
     residual_times_s: dict[str, list[np.ndarray]]
 
@@ -255,7 +257,10 @@ def calibrate(flights: Sequence[SensorFlight], names: Sequence[str],
         prior_mean=np.array(list(values_of(measured, names).values())),
         prior_std=np.array([p.prior_std for p in parameters]), posterior_std=deviation,
         correlations=covariance / np.outer(deviation, deviation), steps=step,
-        reduced_chi_square=reduced, **_per_suite(map_flights(_NoiseAt(model, residual),
+        reduced_chi_square=reduced,
+        flight_posterior_std=np.array([np.sqrt(np.diag(np.linalg.inv(
+            t.gram + prior_inverse) * max(reduced, 1.0))) for t in final]),
+        **_per_suite(map_flights(_NoiseAt(model, residual),
                                                              flights)))
 
 
