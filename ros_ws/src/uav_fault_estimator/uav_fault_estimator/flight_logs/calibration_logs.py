@@ -93,7 +93,6 @@ DEFAULT_SAMPLE_PERIOD_S = 0.05  # sim_node's 20 Hz and mavlink_node's sample_per
 # The wind filter's time constant: the shipped scenarios' filter_time_constant_s and
 # mavlink_node's wind_filter_tau_s [s].
 WIND_FILTER_TAU_S = 10.0
-# The controls no autopilot logs (module docstring), by CONTROL_CHANNELS index.
 DATAFLASH_HEADER = bytes((0xA3, 0x95))  # every DataFlash message starts so
 # A DataFlash message's instance (IMU, GPS, ARSP, RPM) or EKF core: the first is 0
 FIRST_INSTANCE_FIELDS = ("I", "C")
