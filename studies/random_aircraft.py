@@ -1,22 +1,24 @@
 #!/usr/bin/env python3
 """The model calibration on aircraft nobody chose: random airframes, calibrated and flown.
 
-    python -m studies.random_aircraft [--count 40] [--seed 1] [--parameters A,B,...]
-        [--json FILE] [--workers N]
+    python -m studies.random_aircraft [--vehicle aerosonde] [--count 40] [--seed 1]
+        [--parameters A,B,...] [--plan [DIR]] [--json FILE] [--workers N]
 
 Draws --count aircraft at random (numpy's generator seeded with --seed, one stream per
-aircraft) from the scenario `aircraft:` block's parameters, each uniform within DRAW: empty
-mass +-5 %, inertia about each axis +-10 %, CG +-2 cm per axis, thrust +-5 %, every one of
-aerosonde.xml's aerodynamic coefficients +-15 %, the pitot's scale +-3 %, the vanes' biases
-+-0.6 deg; plus the model's own aircraft (`model`, every parameter nominal). Each aircraft,
-through the offline chain (uav_fault_estimator.chain.offline), as studies/model_error.py does it
-through the graph: three fault-free calibration flights (model_error.CALIBRATION_FLIGHTS:
-22, 25 and 28 m/s, winds of 5-6 m/s from three directions; seeds 501-503 for the model's own
-aircraft, plus SEED_STRIDE times its number for a drawn one, so that no two aircraft share
-their turbulence and sensor noise), the model
-calibration (estimation/model_calibration.py, --parameters or the default set) and its
-check (estimation/calibration_check.py), then two test flights of the calibrated model, the
-shipped fault_free and default scenarios (seed 7, the paper's wind), judged against the
+aircraft) about the vehicle's model from the scenario `aircraft:` block's parameters, each
+uniform within DRAW: empty mass +-5 %, inertia about each axis +-10 %, CG +-2 cm per axis,
+thrust +-5 %, every one of the XML's aerodynamic coefficients +-15 %, the pitot's scale
++-3 %, the vanes' biases +-0.6 deg; plus the model's own aircraft (`model`, every parameter
+nominal). Each aircraft, through the offline chain (uav_fault_estimator.chain.offline), as
+studies/model_error.py does it through the graph: its calibration flights, either three
+ordinary fault-free ones (the Aerosonde's only: model_error.CALIBRATION_FLIGHTS, 22, 25 and
+28 m/s, winds of 5-6 m/s from three directions) or with --plan the scenario files of a
+calibration plan (without DIR the vehicle's calibration_plan/: manoeuvre flights), their
+seeds those of the files (501-503) for the model's own aircraft, plus SEED_STRIDE times its
+number for a drawn one, so that no two aircraft share their turbulence and sensor noise;
+the model calibration (estimation/model_calibration.py, --parameters or the default set)
+and its check (estimation/calibration_check.py), then two test flights of the calibrated
+model, the vehicle's shipped fault_free and default scenarios (seed 7), judged against the
 default targets (uav_fault_estimator/reporting/targets.py). Prints a line per aircraft and
 the totals: how many meet the targets, and whether each that does not was flagged by the
 check. Aircraft run one per worker (the campaign layer); about 1.5 minutes each on one core.
@@ -33,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft, SensorBias, coefficient_names
-from uav_aircraft.vehicles import load_vehicle
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
@@ -54,7 +56,7 @@ from uav_fault_estimator.estimation.noise_model import NoiseCalibration, load_no
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting import targets
 from uav_fault_estimator.reporting.metrics import fault_metrics
-from uav_sim.scenario import Scenario, SetpointChange, default_scenario_path, load_scenario
+from uav_sim.scenario import Scenario, SetpointChange, load_scenario, vehicle_scenario_path
 
 from studies.model_error import CALIBRATION_FLIGHTS
 
@@ -83,8 +85,9 @@ OWN_CONDITION = "turbulence, sensor noise"
 MEASUREMENT_ERROR = {"cg_offset_m": 0.003, "inertia_scale": 0.03}
 
 
-def drawn_aircraft(seed: int, index: int) -> FlownAircraft:
-    """Aircraft number index of the study seeded with seed (its own random stream)."""
+def drawn_aircraft(seed: int, index: int, vehicle: str = DEFAULT_VEHICLE) -> FlownAircraft:
+    """Aircraft number index of the study seeded with seed (its own random stream), about
+    the vehicle's model."""
     rng = np.random.default_rng([seed, index])
 
     def around(value: float, half_width: float, size: int | None = None):
@@ -96,7 +99,7 @@ def drawn_aircraft(seed: int, index: int) -> FlownAircraft:
         cg_offset_m=tuple(float(v) for v in around(0.0, DRAW["cg_offset_m"], 3)),
         thrust_scale=float(around(1.0, DRAW["thrust_scale"])),
         coefficients=tuple((name, float(around(1.0, DRAW["coefficient"])))
-                           for name in coefficient_names(load_vehicle())),
+                           for name in coefficient_names(load_vehicle(vehicle))),
         sensor_bias=SensorBias(float(around(1.0, DRAW["airspeed_scale"])),
                                float(around(0.0, DRAW["vane_bias_deg"])),
                                float(around(0.0, DRAW["vane_bias_deg"]))))
@@ -129,7 +132,7 @@ def calibration_scenarios(aircraft: FlownAircraft, index: int, excite: bool = Fa
             wind=dataclasses.replace(flight.wind, turbulence=turbulence),
             sensors=dataclasses.replace(flight.sensors, noise=noise))
             for flight in map(load_scenario, plan)]
-    base = load_scenario(default_scenario_path().parent / "fault_free.yaml")
+    base = load_scenario(vehicle_scenario_path(DEFAULT_VEHICLE, "fault_free"))
     base = dataclasses.replace(base, wind=dataclasses.replace(base.wind, turbulence=turbulence),
                                sensors=dataclasses.replace(base.sensors, noise=noise))
     flights = []
@@ -145,11 +148,12 @@ def calibration_scenarios(aircraft: FlownAircraft, index: int, excite: bool = Fa
     return flights
 
 
-def test_metrics(aircraft: FlownAircraft, model: FlownAircraft) -> dict[str, tuple]:
-    """(faults, false alarms) of the fault_free and default test flights of the aircraft,
-    the models being `model`."""
+def test_metrics(aircraft: FlownAircraft, model: FlownAircraft,
+                 vehicle: str = DEFAULT_VEHICLE) -> dict[str, tuple]:
+    """(faults, false alarms) of the vehicle's fault_free and default test flights of the
+    aircraft, the models being `model`."""
     return {base: fault_metrics(*fly_and_estimate(dataclasses.replace(
-        load_scenario(default_scenario_path().parent / f"{base}.yaml"), aircraft=aircraft),
+        load_scenario(vehicle_scenario_path(vehicle, base)), aircraft=aircraft),
         model=model), SETTLE_S, THRESHOLD_PCT) for base in ("fault_free", "default")}
 
 
@@ -173,16 +177,19 @@ class AircraftTask:
     excite: bool = False
     condition: str = OWN_CONDITION
     plan: tuple[Path, ...] = ()
+    vehicle: str = DEFAULT_VEHICLE
 
 
 def calibrate_scenarios(scenarios: list[Scenario], parameters: tuple[str, ...],
                         measured: FlownAircraft = NOMINAL,
                         ) -> tuple[ModelCalibration, list[SensorFlight], NoiseCalibration]:
-    """The scenarios flown offline and the named parameters calibrated from them, as
-    calibrate_model.py does it; the calibration, the flights and the noise model used."""
+    """The scenarios (of one vehicle) flown offline and the named parameters calibrated
+    from them, as calibrate_model.py does it; the calibration, the flights and the noise
+    model used."""
     flights = [sensor_flight(scenario) for scenario in scenarios]
-    noise = load_noise_calibration()
-    calibration = calibrate(flights, parameters, ResidualSettings(), noise,
+    vehicle = scenarios[0].vehicle
+    noise = load_noise_calibration(vehicle=vehicle)
+    calibration = calibrate(flights, parameters, ResidualSettings(vehicle=vehicle), noise,
                             log=lambda line: None, measured=measured)
     return calibration, flights, noise
 
@@ -196,7 +203,7 @@ def study_aircraft(task: AircraftTask) -> dict:
         task.parameters,
         task.measured)
     warnings = check_calibration(calibration, flights, noise)
-    tests = test_metrics(task.aircraft, calibration.aircraft)
+    tests = test_metrics(task.aircraft, calibration.aircraft, task.vehicle)
     missed = missed_targets(tests)
     fault_free, default = tests["fault_free"][0], tests["default"][0]
     return {
@@ -238,13 +245,18 @@ def print_row(row: dict) -> None:
 PLAN_OF_THE_VEHICLE = Path("calibration_plan")  # --plan without a folder
 
 
-def plan_files(folder: Path | None, parser: argparse.ArgumentParser) -> tuple[Path, ...]:
+def plan_files(folder: Path | None, vehicle: str,
+               parser: argparse.ArgumentParser) -> tuple[Path, ...]:
     """The scenario files of --plan's folder (the vehicle's own for PLAN_OF_THE_VEHICLE;
-    none without --plan); a parser error for a folder without any."""
+    none without --plan); a parser error for a folder without any, or for a vehicle other
+    than the default without a plan (the three ordinary flights are the Aerosonde's)."""
     if folder is None:
+        if vehicle != DEFAULT_VEHICLE:
+            parser.error(f"--vehicle {vehicle} needs --plan: the three ordinary calibration "
+                         f"flights are {DEFAULT_VEHICLE}'s")
         return ()
-    files = (tuple(load_vehicle().calibration_plan_files) if folder == PLAN_OF_THE_VEHICLE
-             else tuple(sorted(folder.glob("*.yaml"))))
+    files = (tuple(load_vehicle(vehicle).calibration_plan_files)
+             if folder == PLAN_OF_THE_VEHICLE else tuple(sorted(folder.glob("*.yaml"))))
     if not files:
         parser.error(f"--plan: no scenario files (*.yaml) in {folder}")
     return files
@@ -252,7 +264,9 @@ def plan_files(folder: Path | None, parser: argparse.ArgumentParser) -> tuple[Pa
 
 def calibration_study_arguments(parser: argparse.ArgumentParser) -> argparse.Namespace:
     """A calibration study's command line, parsed: the parser's own arguments, then
-    --parameters (checked, as a tuple), --excite, --json FILE and the campaign's options."""
+    --vehicle, --parameters (checked, as a tuple), --excite, --plan (its files), --json FILE
+    and the campaign's options."""
+    parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE)
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS))
     parser.add_argument("--excite", action="store_true",
                         help="fly EXCITATION's setpoint changes in the calibration flights")
@@ -263,9 +277,10 @@ def calibration_study_arguments(parser: argparse.ArgumentParser) -> argparse.Nam
     parser.add_argument("--json", type=Path)
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
-    arguments.plan = plan_files(arguments.plan, parser)
+    arguments.plan = plan_files(arguments.plan, arguments.vehicle, parser)
     try:
-        arguments.parameters = parameter_list(arguments.parameters, load_vehicle())
+        arguments.parameters = parameter_list(arguments.parameters,
+                                              load_vehicle(arguments.vehicle))
     except ValueError as error:
         parser.error(str(error))
     return arguments
@@ -286,15 +301,15 @@ def main() -> int:
     arguments = calibration_study_arguments(parser)
     parameters, excite = arguments.parameters, arguments.excite
     condition = arguments.calibration_condition
-    plan = arguments.plan
+    plan, vehicle = arguments.plan, arguments.vehicle
     tasks = [AircraftTask(MODEL, 0, NOMINAL, parameters, excite=excite, condition=condition,
-                          plan=plan)]
+                          plan=plan, vehicle=vehicle)]
     for k in range(1, arguments.count + 1):
-        aircraft = drawn_aircraft(arguments.seed, k)
+        aircraft = drawn_aircraft(arguments.seed, k, vehicle)
         measured = (measured_mass_properties(aircraft, arguments.seed, k)
                     if arguments.measured_mass_properties else NOMINAL)
         tasks.append(AircraftTask(f"#{k}", k, aircraft, parameters, measured, excite,
-                                  condition, plan))
+                                  condition, plan, vehicle))
     started = time.monotonic()
     with Campaign(campaign_options(arguments)) as campaign:
         rows = campaign.results(study_aircraft, tasks, "aircraft")
@@ -307,7 +322,8 @@ def main() -> int:
           f"{totals['meeting_flagged']} flagged that meet them")
     if arguments.json:
         arguments.json.write_text(json.dumps({
-            "count": arguments.count, "seed": arguments.seed, "parameters": list(parameters),
+            "vehicle": vehicle, "count": arguments.count, "seed": arguments.seed,
+            "parameters": list(parameters),
             "measured_mass_properties": (MEASUREMENT_ERROR if arguments.measured_mass_properties
                                          else None),
             "excitation": EXCITATION if excite else None,

@@ -364,7 +364,8 @@ def random_aircraft(data: Mapping[str, Any]) -> list[str]:
     plan = data.get("calibration_plan")
     flights = (f"the calibration plan's flights ({', '.join(plan)})" if plan
                else "three ordinary fault-free flights at 22, 25 and 28 m/s")
-    lines = [f"{data['count']} aircraft drawn with seed {data['seed']} (draw half-widths "
+    lines = [f"{data['count']} aircraft drawn about the {data.get('vehicle', 'aerosonde')} "
+             f"with seed {data['seed']} (draw half-widths "
              f"{', '.join(f'{k} {number(v)}' for k, v in data['draw'].items())}) and the "
              f"model's own; calibrated from {flights} in {condition}; parameters "
              f"{', '.join(data['parameters'])}; {on_the_ground}. Targets: fault-free "

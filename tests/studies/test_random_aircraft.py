@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from uav_aircraft.flown_aircraft import NOMINAL, coefficient_names
 from uav_aircraft.vehicles import load_vehicle
+from uav_sim.scenario import load_scenario
 
 from studies.model_error import CALIBRATION_FLIGHTS
 from studies.random_aircraft import (
@@ -80,3 +81,18 @@ def test_mass_properties_are_measured_within_the_stated_error():
         assert measured.inertia_scale != flown.inertia_scale  # measured, not copied
         assert dataclasses.replace(measured, cg_offset_m=NOMINAL.cg_offset_m,
                                    inertia_scale=NOMINAL.inertia_scale) == NOMINAL
+
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("vehicle", ["aerosonde", "carbon_z"])
+def test_a_plan_flies_each_aircraft_in_its_own_noise_and_the_vehicle_is_its_own(vehicle):
+    plan = tuple(load_vehicle(vehicle).calibration_plan_files)
+    flown = drawn_aircraft(2, 1, vehicle)
+    assert [name for name, _ in flown.coefficients] == list(
+        coefficient_names(load_vehicle(vehicle)))
+    flights = {index: calibration_scenarios(flown, index, plan=plan) for index in range(3)}
+    assert all(f.vehicle == vehicle and f.aircraft == flown and f.manoeuvres
+               for f in flights[1])
+    seeds = [f.seed for index in flights for f in flights[index]]
+    assert len(set(seeds)) == len(seeds)
+    assert [f.seed for f in flights[0]] == [load_scenario(path).seed for path in plan]
