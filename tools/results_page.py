@@ -526,7 +526,10 @@ SECTIONS = (
             "'calm air, ideal sensors' --parameters coefficients,mass_scale,thrust_scale,"
             "cg_y_cm,airspeed_scale,angle_of_attack_deg,sideslip_deg --json "
             "docs/random_aircraft_ideal_all.json && python -m studies.random_aircraft "
-            "--count 12 --plan --json docs/random_aircraft_plan.json",
+            "--count 12 --plan --json docs/random_aircraft_plan.json && python -m "
+            "studies.random_aircraft --seed 2 --plan --json "
+            "docs/random_aircraft_plan_fresh.json && python -m studies.random_aircraft "
+            "--seed 2 --json docs/random_aircraft_fresh.json",
             random_aircraft,
             "Aircraft drawn at random about the model, each calibrated from three fault-free "
             "flights of it and flown through the offline chain with its calibration; the "
@@ -534,7 +537,9 @@ SECTIONS = (
             "the same aircraft calibrated from the same flights flown in calm air with ideal "
             "sensors (the best these flights can give), with the default parameters and with "
             "all 37 (every aerodynamic coefficient); the _plan file: calibrated from the "
-            "vehicle's calibration plan instead (docs/model_calibration.md)."),
+            "vehicle's calibration plan instead; the _fresh files: 40 aircraft of a seed "
+            "nothing was chosen on, from the plan and from the ordinary flights "
+            "(docs/model_calibration.md)."),
     Section("Calibration bias", "calibration_bias*.json",
             "python -m studies.calibration_bias --json docs/calibration_bias.json && "
             "python -m studies.calibration_bias --excite --json "
