@@ -166,9 +166,7 @@ def write_dataflash(path: Path, samples: Sequence[Sample], airframe: Airframe,
     """The samples (module docstring) as an ArduPilot DataFlash log at path, with the named
     messages (of DATAFLASH_NAMES; ARSP only with air data on board): leave one out for a
     log of an aircraft without that sensor. ValueError for an unknown message name."""
-    unknown = sorted(set(messages) - set(DATAFLASH_NAMES))
-    if unknown:
-        raise ValueError(f"DataFlash messages {unknown}: expected some of {DATAFLASH_NAMES}")
+    _check_names(messages, DATAFLASH_NAMES, "DataFlash messages")
     flight = logged_flight(samples, airframe)
     written = [message for message in DATAFLASH_MESSAGES if message.name in messages
                and (message.name != "ARSP" or flight.airspeed_mps is not None)]
@@ -181,6 +179,13 @@ def write_dataflash(path: Path, samples: Sequence[Sample], airframe: Airframe,
                    for message in written]
         for at_sample in zip(*records, strict=True):
             file.write(b"".join(at_sample))
+
+
+def _check_names(names: Collection[str], known: Sequence[str], what: str) -> None:
+    """ValueError (one line) for a name among names that is not known."""
+    unknown = sorted(set(names) - set(known))
+    if unknown:
+        raise ValueError(f"{what} {unknown}: expected some of {tuple(known)}")
 
 
 def _struct(message: DataflashMessage) -> struct.Struct:
@@ -286,9 +291,7 @@ def write_ulog(path: Path, samples: Sequence[Sample], airframe: Airframe,
     ULOG_NAMES; airspeed_validated only with air data on board): leave one out for a log of
     an aircraft without that sensor. The log starts at the first sample. ValueError for an
     unknown topic name."""
-    unknown = sorted(set(topics) - set(ULOG_NAMES))
-    if unknown:
-        raise ValueError(f"ULog topics {unknown}: expected some of {ULOG_NAMES}")
+    _check_names(topics, ULOG_NAMES, "ULog topics")
     flight = logged_flight(samples, airframe)
     written = [topic for topic in ULOG_TOPICS if topic.name in topics
                and (topic.name != "airspeed_validated" or flight.airspeed_mps is not None)]
