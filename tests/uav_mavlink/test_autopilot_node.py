@@ -101,6 +101,15 @@ def start_link(start_process, stack: str, port: int, listener_args: tuple = ()) 
         "-p", f"stack:={stack}"]), "autopilot_node")
 
 
+def wait_until_sent_here(graph, received: dict, topic: str) -> None:
+    """Until mavlink_node's topic is matched on both sides (received: this test's
+    subscriptions, /diagnostics among them): its first samples go out at once, and a
+    subscription that sees the publisher may not be sent to yet."""
+    assert graph.wait_for_publishers(f"/{topic}", 1, 30)
+    assert graph.wait(f"mavlink_node sending {topic} here", lambda: topic in latest_values(
+        received["/diagnostics"], "/mavlink_node").get("subscribed", "").split(", "), 30)
+
+
 def played_publishers(graph) -> dict:
     """Publishers on sim_node's topics under PLAYED, once autopilot_node listens (made once
     per test: the graph fixture keeps its node)."""
@@ -136,14 +145,17 @@ def test_the_flight_comes_out_of_mavlink_node_as_it_went_in(start_process, graph
     start_link(start_process, stack, port)
     received = graph.subscribe({"/state": AircraftState}, STREAM_QOS)
     received |= graph.subscribe({"/diagnostics": DiagnosticArray})
-    assert graph.wait_for_publishers("/state", 1, 30)
+    wait_until_sent_here(graph, received, "state")
     samples = flight()
     publish_flight(graph, samples)
     # every sample: the last one's messages release it (each stream has a reading at it)
     assert graph.wait("the flight out of mavlink_node",
                       lambda: len(received["/state"]) >= len(samples), 30), (
-        len(received["/state"]), len(samples), latest_values(received["/diagnostics"],
-                                                             "/mavlink_node"))
+        len(received["/state"]), len(samples), "missing at", sorted(
+            {round(s.time_s, 2) for s in samples} - {round(stamp_nanoseconds(
+                m.header.stamp) / 1e9, 2) for m in received["/state"]}),
+        latest_values(received["/diagnostics"], "/mavlink_node"),
+        latest_values(received["/diagnostics"], f"{PLAYED}/autopilot_node"))
     graph.spin(2.0, until=lambda: latest_values(received["/diagnostics"],
                                                 f"{PLAYED}/autopilot_node").get("samples")
                == str(len(samples)))
@@ -235,7 +247,7 @@ def test_the_servo_map_read_from_the_autopilot_replaces_a_wrong_file(start_proce
                                                   "-p", "servo_map_from_autopilot:=true"))
     received = graph.subscribe({"/controls": ControlInputs}, STREAM_QOS)
     received |= graph.subscribe({"/diagnostics": DiagnosticArray})
-    assert graph.wait_for_publishers("/controls", 1, 30)
+    wait_until_sent_here(graph, received, "controls")
     samples = flight()
     publishers = played_publishers(graph)
     publish_flight(graph, samples[:5], publishers)  # heard: the parameters are asked for

@@ -466,7 +466,12 @@ class MavlinkNode(Node):
                                                    - set(self.heard_s))) or "none",
                   "stale": ", ".join(stale) or "none",
                   "too_slow": ", ".join(self.slow) or "none",
-                  "out_of_order": self.assembly.out_of_order, **self.counts, **rates}
+                  "out_of_order": self.assembly.out_of_order,
+                  # matched on this side: a subscriber's own match can come first
+                  "subscribed": ", ".join(
+                      publisher.topic_name.lstrip("/") for publisher in self.publishers_.values()
+                      if publisher.get_subscription_count() > 0) or "none",
+                  **self.counts, **rates}
         if self.heartbeat_s is None or now_s - self.heartbeat_s > HEARTBEAT_LOST_S:
             if self.heartbeat_s is not None and not self.heartbeat_lost:
                 self.heartbeat_lost = True
