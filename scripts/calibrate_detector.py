@@ -45,7 +45,7 @@ from uav_fault_estimator.detection.calibration import (
 )
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
-from uav_fault_estimator.detection.generators import SURFACE_GENERATORS, generator_names
+from uav_fault_estimator.detection.generators import SHIPPED_GENERATORS, generator_names
 from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
 from uav_fault_estimator.reporting.calibration_output import write_calibration
 
@@ -82,8 +82,9 @@ def main() -> int:
                         help="recordings of fault-free flights to calibrate from, not flying")
     parser.add_argument("--out", type=Path,
                         help="default: the vehicle's folder in this source tree")
-    parser.add_argument("--generators", type=generator_names, default=SURFACE_GENERATORS,
-                        help="comma-separated (detection/generators.py; default roll,pitch,yaw)")
+    parser.add_argument("--generators", type=generator_names, default=SHIPPED_GENERATORS,
+                        help="comma-separated (detection/generators.py; default "
+                             + ",".join(SHIPPED_GENERATORS) + ")")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     out = arguments.out or calibration_output_path(arguments.vehicle, DETECTOR_CALIBRATION_FILE)
@@ -97,7 +98,7 @@ def main() -> int:
     except (ValueError, FileNotFoundError) as error:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)
         return 1
-    header += "# Valid for the sample period, forgetting factor and window below only.\n"
+    header += "# Valid for the sample period, forgetting factor and windows below only.\n"
     write_calibration(out, header, calibration_to_dict(calibration),
                       f"{len(flights)} flights", time.monotonic() - started)
     return 0

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """ALFA's failure kinds seeded in simulation, and how soon the detector finds each (a study).
 
-    python -m studies.alfa_kinds --vehicle VEHICLE [--flights 20] [--calibration FILE]
-        [--json FILE]
+    python -m studies.alfa_kinds --vehicle VEHICLE [--flights 20] [--first-seed 501]
+        [--calibration FILE] [--json FILE]
 
 For each of ALFA's kinds (both ailerons, one aileron, the elevator and the rudder stuck at
 0, as ALFA's injection pins them, and the engine cut), flies --flights variants of the
-vehicle's fault-free scenario (seeds from 501, winds of 20-25 % of its airspeed in as many
-directions; seeds the calibrations never flew) with the failure from an onset drawn in
+vehicle's fault-free scenario (seeds from --first-seed, winds of 20-25 % of its airspeed in
+as many directions; seeds the calibrations never flew: 501, the default, chose the fast
+test's settings, 901 judges them) with the failure from an onset drawn in
 60-120 s (seeded), to 30 s after it; and --flights fault-free flights as long (the longest
 onset plus 30 s). The detector runs offline on each (detector_node's defaults, the vehicle's
 shipped calibration or --calibration's, on its 0.2 s grid) and counts, per kind: the flights
@@ -60,7 +61,8 @@ from uav_fault_estimator.detection.detector_settings import (
 )
 from uav_sim.scenario import ACTUATOR_FAULT_PCT, Scenario, SeededFault
 
-FIRST_SEED = 501  # other seeds than the calibrations' (101-112, 301-304) and the studies'
+# the default: other seeds than the calibrations' (101-112, 301-304) and the studies'
+FIRST_SEED = 501
 ONSET_RANGE_S = (60.0, 120.0)
 AFTER_ONSET_S = 30.0
 WITHIN_S = 5.0  # ALFA's evaluator: a detection later than this is a miss
@@ -69,13 +71,14 @@ FAULT_FREE = "fault_free"
 REQUIRED_SNR = NormalDist().inv_cdf(0.95) + NormalDist().inv_cdf(0.90)
 
 
-def flights(vehicle: str, count: int) -> list[tuple[str, float, Scenario]]:
-    """(kind or FAULT_FREE, onset [s] or nan, scenario) of every flight of the study; the
-    failed flights' twins are twin(scenario)."""
-    rng = np.random.default_rng(FIRST_SEED)
+def flights(vehicle: str, count: int, first_seed: int = FIRST_SEED
+            ) -> list[tuple[str, float, Scenario]]:
+    """(kind or FAULT_FREE, onset [s] or nan, scenario) of every flight of the study, seeds
+    from first_seed; the failed flights' twins are twin(scenario)."""
+    rng = np.random.default_rng(first_seed)
     table = []
     for k, kind in enumerate((*ACTUATOR_FAULT_NAMES, FAULT_FREE)):
-        bases = fault_free_flights(count, FIRST_SEED + count * k, 15.0 * k, vehicle)
+        bases = fault_free_flights(count, first_seed + count * k, 15.0 * k, vehicle)
         for base in bases:
             onset_s = float(rng.uniform(*ONSET_RANGE_S))
             if kind == FAULT_FREE:
@@ -177,12 +180,13 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicle", choices=vehicle_names(), required=True)
     parser.add_argument("--flights", type=int, default=20)
+    parser.add_argument("--first-seed", type=int, default=FIRST_SEED)
     parser.add_argument("--calibration", type=Path, help="default: the vehicle's shipped one")
     parser.add_argument("--json", type=Path)
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
-    table = flights(arguments.vehicle, arguments.flights)
+    table = flights(arguments.vehicle, arguments.flights, arguments.first_seed)
     twins = [twin(scenario) for kind, _, scenario in table if kind != FAULT_FREE]
     with Campaign(campaign_options(arguments)) as campaign:
         grid = fly_on_grid_each(campaign, [scenario for *_, scenario in table] + twins,
@@ -203,6 +207,7 @@ def main() -> int:
     if arguments.json:
         arguments.json.write_text(json.dumps(
             {"vehicle": arguments.vehicle, "flights_per_kind": arguments.flights,
+             "first_seed": arguments.first_seed,
              "generators": list(calibration.channels),
              "within_s": WITHIN_S, "required_signal_to_noise": REQUIRED_SNR,
              "kinds": result, "wall_s": wall_s}, indent=2) + "\n")

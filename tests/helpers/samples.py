@@ -71,8 +71,12 @@ SAMPLE_FIELDS: dict[str, dict[str, Any]] = {
         "parameter_deviation": [0.5, 4.0, 0.25],
         "parameter_threshold": 3.0,
         "parameter_alarm": True,
+        "fast_statistic": [0.5, 6.25, 1.0],
+        "fast_threshold": [4.5, 4.5, 4.75],
+        "fast_alarm": [False, True, False],
         "combined_alarm": True,
         "false_alarm_probability": 0.001,
+        "fast_false_alarms_per_hour": 1.0,
     },
 }
 

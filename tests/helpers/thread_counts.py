@@ -69,7 +69,8 @@ def flight_figures(duration_s: float) -> dict:
     estimates, _ = fly_and_estimate(scenario)
     settings = DetectorSettings()
     calibration = dataclasses.replace(detector_calibration(settings), settle_s=0.0)
-    samples = run_detector(calibration, fly_on_grid(scenario, calibration.sample_period_s),
+    flight = fly_on_grid(scenario, calibration.sample_period_s).detector_flight
+    samples = run_detector(calibration, flight,
                            settings.false_alarm_probability)
     statistics = np.array([s.statistic for s in samples])
     return {

@@ -78,11 +78,17 @@ def test_unseen_airspeeds_stay_near_the_design_and_faults_come_sooner(flown):
                 f"{test} {row[test]:.4f}" for test in TESTS))
     for row in measured["scheduled"]:
         assert max(row.values()) <= 5 * P_FA, row
-    delays = {name: first_combined_alarm_s(run_detector(calibration, fault_flight, P_FA),
-                                          onset_s) - onset_s
-              for name, calibration in made.items()}
-    print("aileron loss at 23 m/s found after", delays)
+    runs = {name: run_detector(calibration, fault_flight, P_FA)
+            for name, calibration in made.items()}
+    # the schedule speeds the self-tuning test; the fast test does not read the airspeed
+    delays = {name: next(s.time_s for s in samples
+                         if s.time_s >= onset_s and s.self_tuning_alarm) - onset_s
+              for name, samples in runs.items()}
+    combined = first_combined_alarm_s(runs["scheduled"], onset_s) - onset_s
+    print("aileron loss at 23 m/s found by the self-tuning test after", delays,
+          "and by the combined alarm after", combined)
     assert delays["scheduled"] < delays["unscheduled"] <= 10.0
+    assert combined <= delays["scheduled"]
     spread = {name: c.channels["roll"].parameter_std[0] for name, c in made.items()}
     assert spread["scheduled"] < 0.7 * spread["unscheduled"], spread
 

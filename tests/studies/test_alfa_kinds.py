@@ -8,7 +8,11 @@ import math
 import numpy as np
 import pytest
 from uav_fault_estimator.chain.offline import GridFlight
-from uav_fault_estimator.detection.calibration import Calibration, ChannelCalibration
+from uav_fault_estimator.detection.calibration import (
+    Calibration,
+    ChannelCalibration,
+    FastTestCalibration,
+)
 from uav_fault_estimator.detection.change_detection import Weibull
 
 from studies.alfa_kinds import FAULT_FREE, REQUIRED_SNR, flights, signal_to_noise, twin
@@ -30,7 +34,8 @@ def level_flight_north(forces_mps2: np.ndarray) -> GridFlight:
 
 def longitudinal_calibration() -> Calibration:
     channel = ChannelCalibration(np.array([0.05]), np.eye(1), np.array([0.05]), np.ones(1),
-                                 Weibull(1.0, 1.0))
+                                 Weibull(1.0, 1.0),
+                                 FastTestCalibration(1.0, Weibull(1.0, 1.0)))
     return Calibration(PERIOD_S, 0.995, 25, 30.0, {"longitudinal_force": channel},
                        Weibull(1.0, 1.0))
 

@@ -1,6 +1,7 @@
 """The detector's pieces against known answers: RLS on synthetic ARX data (eq. 9-11), the
 Laplacian GLRT against its likelihoods computed directly (eq. 22), the Weibull threshold
-(eq. 25) against scipy, and the calibration file's round trip."""
+(eq. 25) against scipy, the fast window test on white residuals and a step, and the
+calibration file's round trip."""
 
 from __future__ import annotations
 
@@ -8,16 +9,24 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 from scipy import stats
-from uav_fault_estimator.detection.calibration import Calibration, ChannelCalibration
+from uav_fault_estimator.detection.calibration import (
+    Calibration,
+    ChannelCalibration,
+    FastTestCalibration,
+)
 from uav_fault_estimator.detection.calibration_file import (
     calibration_from_dict,
     calibration_to_dict,
+    read_calibration,
 )
 from uav_fault_estimator.detection.change_detection import (
     SlidingGlrt,
+    SlidingMeanChange,
     Weibull,
     laplacian_glrt,
+    per_sample_probability,
     weibull_fit,
     weibull_threshold,
 )
@@ -107,7 +116,8 @@ def test_weibull_threshold_gives_exactly_the_false_alarm_probability():
 
 def small_calibration() -> Calibration:
     channels = {name: ChannelCalibration(
-        np.full(n, 0.5), np.eye(n), np.zeros(n), np.ones(n), Weibull(2.0, 1.5))
+        np.full(n, 0.5), np.eye(n), np.zeros(n), np.ones(n), Weibull(2.0, 1.5),
+        FastTestCalibration(0.1, Weibull(1.2, 1.4)))
         for name, n in (("roll", 2), ("pitch", 2), ("yaw", 3))}
     return Calibration(0.2, 0.995, 25, 30.0, channels, Weibull(1.5, 2.5))
 
@@ -152,3 +162,70 @@ def test_a_new_false_alarm_probability_moves_the_thresholds_and_keeps_the_genera
     assert all(np.array_equal(detector.rls[name].theta, theta[name]) for name in SURFACE_GENERATORS)
     sample = detector.update(1.0, state, controls)
     assert sample is not None and sample.threshold == pytest.approx(detector.thresholds)
+
+
+@pytest.mark.timeout(30)
+def test_the_window_statistic_is_standard_on_white_residuals_and_rises_with_a_step():
+    rng = np.random.default_rng(3)
+    std, window, reference = 0.5, 15, 150
+    test = SlidingMeanChange(window, reference, std)
+    # an offset of the residuals' mean (a new day's bias) does not move it
+    white = [test.update(x) for x in rng.normal(2.0, std, 20_000)]
+    assert white[:window + reference - 1] == [None] * (window + reference - 1)
+    z = np.array(white[window + reference - 1:])
+    # |N(0, 1)|: mean sqrt(2/pi), 5 % above 1.96
+    assert z.mean() == pytest.approx(math.sqrt(2 / math.pi), rel=0.05)
+    assert (z > 1.96).mean() == pytest.approx(0.05, abs=0.01)
+    # a step of the mean by d: after a full window of it, |d| / std / sqrt(1/W + 1/R)
+    step = SlidingMeanChange(window, reference, std)
+    for x in rng.normal(0.0, std, reference):
+        step.update(x)
+    after = [step.update(x) for x in rng.normal(-0.4, std, window)][-1]
+    assert after == pytest.approx(0.4 / std / math.sqrt(1 / window + 1 / reference), abs=3.0)
+    with pytest.raises(ValueError, match="spread"):
+        SlidingMeanChange(window, reference, 0.0)
+
+
+@pytest.mark.timeout(30)
+def test_a_rate_per_hour_is_a_probability_per_sample_of_a_window():
+    # 1 per hour, 15 samples of 0.2 s: 1 * 15 * 0.2 / 3600
+    assert per_sample_probability(1.0, 15, 0.2) == pytest.approx(15 * 0.2 / 3600)
+    assert per_sample_probability(1e6, 15, 0.2) == 0.5
+    with pytest.raises(ValueError, match="per hour"):
+        per_sample_probability(0.0, 15, 0.2)
+
+
+@pytest.mark.timeout(30)
+def test_the_fast_test_alarms_within_its_window_of_a_step_the_rls_would_absorb():
+    """A roll channel p = a da + b, the calibration's a = b = 0.5 fixed: a step of b by 10
+    residual spreads after the detector settled raises the fast test within its window; the
+    thresholds follow the designed rate per hour."""
+    calibration = small_calibration()
+    detector = SelfTuningDetector(calibration, 0.01, fast_false_alarms_per_hour=2.0)
+    probability = per_sample_probability(2.0, calibration.fast_window, 0.2)
+    assert detector.fast_thresholds == pytest.approx(
+        [weibull_threshold(Weibull(1.2, 1.4), probability)] * 3)
+    rng = np.random.default_rng(4)
+    state, controls = np.zeros(14), np.zeros(7)
+    step_s, first_s = 40.0, None
+    for k in range(1, 300):
+        time_s = 0.2 * k
+        controls[2] = rng.normal(0.0, 0.1)  # aileron
+        bias = 0.5 + (1.0 if time_s >= step_s else 0.0)
+        state[9] = 0.5 * controls[2] + bias + rng.normal(0.0, 0.1)  # roll rate
+        state[11] = 0.5 * controls[2] + 0.5 * state[11] + 0.5  # yaw rate, as calibrated
+        sample = detector.update(time_s, state, controls)
+        if sample is not None and sample.fast_alarm[0] and first_s is None:
+            first_s = time_s
+            assert sample.combined_alarm and not sample.fast_alarm[2]
+    assert step_s <= first_s < step_s + calibration.fast_window * 0.2
+
+
+@pytest.mark.timeout(30)
+def test_a_calibration_without_the_fast_test_is_refused_in_one_line(tmp_path):
+    data = calibration_to_dict(small_calibration())
+    del data["fast_window"]
+    path = tmp_path / "old.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with pytest.raises(ValueError, match=r"holds no fast test.*calibrate again"):
+        read_calibration(str(path), data["airframe"])

@@ -129,7 +129,8 @@ def samples_alarmed_at(times_s: np.ndarray, alarmed: dict[float, int]) -> list[D
         alarm = np.array([channel == 0, channel == 1])
         samples.append(DetectorSample(
             float(time_s), np.zeros(2), np.where(alarm, 5.0, 1.0), np.full(2, 2.0), alarm,
-            np.where(alarm, 9.0, 0.5), 3.0, bool(alarm.any()), bool(alarm.any()), {}, math.nan))
+            np.where(alarm, 9.0, 0.5), 3.0, bool(alarm.any()), np.zeros(2), np.ones(2),
+            np.full(2, 2.0), np.zeros(2, dtype=bool), bool(alarm.any()), {}, math.nan))
     return samples
 
 

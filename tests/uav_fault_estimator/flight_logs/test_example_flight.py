@@ -104,7 +104,8 @@ def test_the_pages_benchmark_runs_on_the_example(root: Path):
     result = run_block(block_with("alfa_benchmark.py examples"), root)
     assert result.returncode == 0, result.stderr
     assert f"{FLIGHT}" in result.stdout and "aileron" in result.stdout
-    assert "at any delay: tp 1, fp 0, fn 0, tn 0" in result.stdout
+    # the page: calibrated on its own 50 s, the flight alarms before its onset
+    assert "at any delay: tp 0, fp 1, fn 0, tn 0" in result.stdout
 
 
 @pytest.mark.slow

@@ -11,7 +11,10 @@ from uav_aircraft.airframe import load_airframe
 from uav_aircraft.vehicles import load_vehicle
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_common.sample_grid import on_grid
-from uav_fault_estimator.detection.calibration_file import read_calibration
+from uav_fault_estimator.detection.calibration_file import (
+    read_calibration,
+    surface_calibration_path,
+)
 from uav_fault_estimator.detection.detector import SelfTuningDetector
 from uav_fault_estimator.flight_logs.resample import (
     ANGULAR,
@@ -205,7 +208,7 @@ def test_a_log_becomes_the_detectors_state_and_controls():
     [line] = inputs.warnings
     assert line.startswith("log synthetic.ulg: stream outputs is slower than the detector's")
     # the detector runs on it: every grid point after the first is a detector sample
-    detector = SelfTuningDetector(read_calibration(""),
+    detector = SelfTuningDetector(read_calibration(str(surface_calibration_path())),
                                   false_alarm_probability=0.01)
     made = [detector.update(*sample) for sample in zip(*inputs.flight, strict=True)]
     assert sum(sample is not None for sample in made) == times_s.size - 1
@@ -223,7 +226,7 @@ def test_a_gap_in_the_rates_skips_those_detector_samples_only():
     rate_missing = np.isnan(inputs.state[:, STATE_CHANNELS.index("roll_rate")])
     assert (inputs.times_s[rate_missing] > 9.9).all()
     assert (inputs.times_s[rate_missing] < 12.1).all() and rate_missing.sum() >= 9
-    detector = SelfTuningDetector(read_calibration(""),
+    detector = SelfTuningDetector(read_calibration(str(surface_calibration_path())),
                                   false_alarm_probability=0.01)
     made = [detector.update(*sample) for sample in zip(*inputs.flight, strict=True)]
     # and the first sample after the gap: its r[k-1] fell in the gap (the yaw model's input)

@@ -10,7 +10,10 @@ import pytest
 from helpers import simulated_logs
 from uav_aircraft.airframe import load_airframe
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S
-from uav_fault_estimator.detection.calibration_file import read_calibration
+from uav_fault_estimator.detection.calibration_file import (
+    read_calibration,
+    surface_calibration_path,
+)
 from uav_fault_estimator.detection.detector import run_detector
 from uav_fault_estimator.detection.detector_settings import DetectorSettings
 from uav_fault_estimator.flight_logs.readers import read_log
@@ -31,7 +34,7 @@ def test_the_logs_give_the_direct_runs_detection_delay(tmp_path):
     truth = simulated_logs.simulate_truth(scenario, SEED)
     simulated_logs.write_ulog(tmp_path / "flight.ulg", truth)
     simulated_logs.write_mavros_bag(tmp_path / "flight.bag", truth, SEED)
-    calibration = read_calibration("")
+    calibration = read_calibration(str(surface_calibration_path()))  # no setpoints in the logs
     airframe = load_airframe(simulated_logs.FIXTURE_AIRFRAME)
     p_fa = DetectorSettings().false_alarm_probability
     delays = {"direct": first_combined_alarm_s(

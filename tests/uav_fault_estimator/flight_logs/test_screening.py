@@ -32,8 +32,10 @@ def sample(time_s: float, statistic: tuple[float, float, float],
     yaw) against THRESHOLD, alarms as the detector sets them."""
     statistic, deviation = np.array(statistic), np.array(deviation)
     alarm, deviates = statistic > THRESHOLD, deviation > THRESHOLD
+    quiet = np.ones(3)  # the fast test's statistic, below THRESHOLD: the self-tuning tests'
     return DetectorSample(time_s, np.zeros(3), statistic, np.full(3, THRESHOLD), alarm,
-                          deviation, THRESHOLD, bool(deviates.any()),
+                          deviation, THRESHOLD, bool(deviates.any()), np.zeros(3), quiet,
+                          np.full(3, THRESHOLD), quiet > THRESHOLD,
                           bool(np.any(alarm & deviates)), {}, 25.0)
 
 
@@ -87,6 +89,7 @@ def test_summary_counts_and_first_alarm() -> None:
     assert summary["alarm_samples"] == {
         "glrt": {"any": 6, "roll": 5, "pitch": 0, "yaw": 1},
         "parameter": {"any": 4, "roll": 3, "pitch": 1, "yaw": 0},
+        "fast": {"any": 0, "roll": 0, "pitch": 0, "yaw": 0},
         "combined": {"any": 3, "roll": 3, "pitch": 0, "yaw": 0},
     }
     assert summary["alarm_rate"]["combined"] == pytest.approx(3 / 7)

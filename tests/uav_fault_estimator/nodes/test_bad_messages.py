@@ -15,6 +15,7 @@ from uav_common.channels import STATE_CHANNELS
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
+from uav_fault_estimator.detection.calibration_file import surface_calibration_path
 from uav_fault_msgs.msg import FaultAlarm, FaultEstimate, Residuals
 from uav_sim.ros.flight_replay import FlightSample, Replayer, simulated_flight
 from uav_sim.ros.flight_replay import message as simulated_message
@@ -38,6 +39,8 @@ def start_pair(start_process, graph, node: str = "residual_node",
     parameters = ["-p", f"wait_for_subscribers:={subscribers}"]
     if node == "residual_node":
         parameters += ["-p", f"recovery_s:={RECOVERY_S}"]
+    else:  # the replayer sends no setpoints: the paper's generators
+        parameters += ["-p", f"calibration_file:={surface_calibration_path()}"]
     for namespace in (CLEAN, DIRTY):
         start_process(ros2_run_argv(
             "uav_fault_estimator", node, ros_args=["-r", f"__ns:={namespace}", *parameters]),

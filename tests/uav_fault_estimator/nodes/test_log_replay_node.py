@@ -21,7 +21,11 @@ from uav_aircraft.airframe import load_airframe
 from uav_common.message_fields import air_data_array, setpoints_array, stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
-from uav_fault_estimator.detection.calibration_file import calibration_to_dict, read_calibration
+from uav_fault_estimator.detection.calibration_file import (
+    calibration_to_dict,
+    read_calibration,
+    surface_calibration_path,
+)
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.flight_logs.readers import read_log
@@ -126,15 +130,17 @@ def test_detector_node_on_a_replayed_log_gives_the_offline_alarms(
                               "/state": AircraftState}, STREAM_QOS)
     alarms, air_data = topics["/faults/alarm"], topics["/air_data"]
     health = graph.subscribe({"/diagnostics": DiagnosticArray}, DIAGNOSTICS_QOS)["/diagnostics"]
+    calibration = str(surface_calibration_path())  # these logs carry no setpoints
     start_process(ros2_run_argv("uav_fault_estimator", "detector_node", ros_args=[
-        "-p", "wait_for_subscribers:=1"]), "detector_node")  # inputs once this test listens
+        "-p", "wait_for_subscribers:=1", "-p", f"calibration_file:={calibration}"]),
+        "detector_node")  # inputs once this test listens
     replay = start_process(replay_argv(log, FIXTURE_AIRFRAME,
                                        "-p", "real_time_factor:=0",
                                        "-p", "wait_for_subscribers:=2"), "log_replay_node")
     assert replay.wait(timeout_s=40) == 0, replay.output()
 
     inputs = detector_samples(read_log(log), load_airframe(FIXTURE_AIRFRAME), 0.2)
-    offline = run_detector(read_calibration(""), inputs.flight, 0.01)
+    offline = run_detector(read_calibration(calibration), inputs.flight, 0.01)
     graph.spin(20.0, until=lambda: len(alarms) >= len(offline)
                and len(air_data) >= inputs.times_s.size)
     assert_alarms_are_the_cores(alarms, offline)

@@ -38,6 +38,9 @@ DEFAULT_VEHICLE = "aerosonde"
 VEHICLE_FILE = "vehicle.yaml"
 NOISE_FILE = "residual_noise.yaml"
 DETECTOR_CALIBRATION_FILE = "detector_calibration.yaml"
+# The paper's three generators' calibration: for flights and logs without the autopilot's
+# setpoints, which the shipped generators read.
+SURFACE_DETECTOR_CALIBRATION_FILE = "detector_calibration_surfaces.yaml"
 AIRFRAMES = "airframes"  # the folder of its airframe files
 CALIBRATION_PLAN = "calibration_plan"  # its folder of calibration flights
 MAX_VEHICLE_BYTES = 16 * 1024
@@ -152,6 +155,12 @@ class Vehicle:
     def detector_calibration_file(self) -> Path:
         """The detector's calibration on this aircraft's fault-free flights."""
         return self.folder / DETECTOR_CALIBRATION_FILE
+
+    @property
+    def surface_detector_calibration_file(self) -> Path:
+        """The detector's calibration of the paper's three generators (roll, pitch, yaw: the
+        surfaces and body rates alone) on the same flights."""
+        return self.folder / SURFACE_DETECTOR_CALIBRATION_FILE
 
 
 def vehicle_names() -> tuple[str, ...]:

@@ -29,6 +29,13 @@ DEFAULT_SETTLE_S = 30.0  # no test until the RLS has had this long after a start
 # remember about two samples, nothing left to identify
 DEFAULT_FORGETTING_FACTOR = 0.995
 DEFAULT_WINDOW = 25  # M, the GLRT's window [samples]
+# W, the fast test's window [samples]: 3 s at 5 Hz. Chosen on the dev flights of
+# studies/alfa_kinds.py (seeds from 501; docs/detector.md): of 2, 3, 4 and 5 s, 3 s found
+# the most single-aileron failures of the Carbon-Z within 5 s with no fault-free alarm.
+DEFAULT_FAST_WINDOW = 15
+# R, the fast test's reference before its window [samples]: 30 s at 5 Hz, long beside W
+# (its mean's noise adds W/R to the statistic's variance) and short beside a day's drift.
+DEFAULT_FAST_REFERENCE = 150
 
 
 def simulated_airframe(vehicle: str = DEFAULT_VEHICLE) -> str:
@@ -43,17 +50,29 @@ SIMULATED_AIRFRAME = simulated_airframe()
 MIN_SCHEDULE_SPAN_MPS = 2.0
 
 @dataclass(frozen=True)
+class FastTestCalibration:
+    """What fault-free flights taught of one generator's residual with its parameters fixed
+    at theta0 (the fast test's): its standard deviation, and the Weibull distribution of the
+    window statistic (change_detection.SlidingMeanChange) on them."""
+
+    residual_std: float
+    statistic: Weibull
+
+
+@dataclass(frozen=True)
 class ChannelCalibration:
     """What fault-free flights taught of one generator: initial parameters theta0 and
     covariance P0 of the RLS, the parameters' mean (at the reference airspeed when
     scheduled) and standard deviation in flight, the Weibull distribution of its GLRT
-    statistic, and with an airspeed schedule the means' slopes [per m/s]."""
+    statistic, the fast test's calibration, and with an airspeed schedule the means'
+    slopes [per m/s]."""
 
     theta0: np.ndarray
     p0: np.ndarray
     parameter_mean: np.ndarray
     parameter_std: np.ndarray
     glrt: Weibull
+    fast: FastTestCalibration
     parameter_slope: np.ndarray | None = None
 
     def expected_parameters(self, airspeed_offset_mps: float) -> np.ndarray:
@@ -66,8 +85,8 @@ class ChannelCalibration:
 
 @dataclass(frozen=True)
 class Calibration:
-    """The detector's calibration; valid for its sample period, forgetting factor and
-    GLRT window only (the statistics' distributions depend on them)."""
+    """The detector's calibration; valid for its sample period, forgetting factor, GLRT
+    window and fast-test windows only (the statistics' distributions depend on them)."""
 
     sample_period_s: float
     forgetting_factor: float
@@ -77,6 +96,8 @@ class Calibration:
     parameter: Weibull  # of the largest normalised parameter deviation over the channels
     airframe: str = SIMULATED_AIRFRAME
     reference_airspeed_mps: float | None = None  # U_ref of the airspeed schedule; None: none
+    fast_window: int = DEFAULT_FAST_WINDOW  # W of the fast test [samples]
+    fast_reference: int = DEFAULT_FAST_REFERENCE  # R of the fast test [samples]
 
     @property
     def scheduled(self) -> bool:

@@ -17,6 +17,7 @@ from uav_fault_estimator.detection.calibration import (
     SIMULATED_AIRFRAME,
     Calibration,
     ChannelCalibration,
+    FastTestCalibration,
 )
 from uav_fault_estimator.detection.change_detection import Weibull
 from uav_fault_estimator.detection.generators import GENERATORS, checked_generators
@@ -38,6 +39,8 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
         "forgetting_factor": calibration.forgetting_factor,
         "window": calibration.window,
         "settle_s": calibration.settle_s,
+        "fast_window": calibration.fast_window,
+        "fast_reference": calibration.fast_reference,
         "parameter_deviation_weibull": _weibull_dict(calibration.parameter),
         "channels": {name: {
             "parameters": list(GENERATORS[name].parameters),
@@ -47,6 +50,8 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
             "parameter_slope_per_mps": (None if c.parameter_slope is None
                                         else c.parameter_slope.tolist()),
             "glrt_weibull": _weibull_dict(c.glrt),
+            "fast_residual_std": c.fast.residual_std,
+            "fast_weibull": _weibull_dict(c.fast.statistic),
         } for name, c in calibration.channels.items()},
     }
 
@@ -54,6 +59,9 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
 def calibration_from_dict(data: Mapping[str, Any]) -> Calibration:
     """From calibration_to_dict's layout; KeyError or ValueError on a malformed one."""
     reference = data["reference_airspeed_mps"]
+    if min(int(data["fast_window"]), int(data["fast_reference"])) < 1:
+        raise ValueError(f"fast_window {data['fast_window']}, fast_reference "
+                         f"{data['fast_reference']}: at least 1 sample each")
     channels = {}
     for name in checked_generators(tuple(data["channels"])):
         c = data["channels"][name]
@@ -69,13 +77,17 @@ def calibration_from_dict(data: Mapping[str, Any]) -> Calibration:
                 slope is not None and len(slope) != n):
             raise ValueError(f"channel {name}: arrays must be {n}, {n}x{n}, {n}, {n}, and "
                              f"a slope of {n} exactly when scheduled on airspeed")
+        fast = FastTestCalibration(float(c["fast_residual_std"]), Weibull(**c["fast_weibull"]))
+        if not fast.residual_std > 0.0:
+            raise ValueError(f"channel {name}: fast_residual_std must be > 0")
         channels[name] = ChannelCalibration(
-            *arrays, glrt=Weibull(**c["glrt_weibull"]),
+            *arrays, glrt=Weibull(**c["glrt_weibull"]), fast=fast,
             parameter_slope=None if slope is None else np.array(slope, dtype=float))
     return Calibration(float(data["sample_period_s"]), float(data["forgetting_factor"]),
                        int(data["window"]), float(data["settle_s"]), channels,
                        Weibull(**data["parameter_deviation_weibull"]), str(data["airframe"]),
-                       None if reference is None else float(reference))
+                       None if reference is None else float(reference), int(data["fast_window"]),
+                       int(data["fast_reference"]))
 
 
 def _weibull_dict(distribution: Weibull) -> dict[str, float]:
@@ -86,6 +98,13 @@ def _weibull_dict(distribution: Weibull) -> dict[str, float]:
 def shipped_calibration_path(vehicle: str = DEFAULT_VEHICLE) -> Path:
     """The vehicle's detector_calibration.yaml (scripts/calibrate_detector.py)."""
     return load_vehicle(vehicle).detector_calibration_file
+
+
+def surface_calibration_path(vehicle: str = DEFAULT_VEHICLE) -> Path:
+    """The vehicle's calibration of the paper's three generators (roll, pitch, yaw), for
+    flights and logs without the autopilot's setpoints (scripts/calibrate_detector.py
+    --generators roll,pitch,yaw)."""
+    return load_vehicle(vehicle).surface_detector_calibration_file
 
 
 def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibration:
@@ -100,6 +119,10 @@ def read_calibration(path: str, airframe: str = SIMULATED_AIRFRAME) -> Calibrati
     mismatch = kind_mismatch(data, CALIBRATION_KEYS, DETECTOR_CALIBRATION)
     if mismatch:
         raise ValueError(f"calibration file {file}: {mismatch}")
+    if "fast_window" not in data:
+        raise ValueError(f"calibration file {file} holds no fast test (fast_window, "
+                         "fast_reference, each channel's fast_*): calibrate again "
+                         "(scripts/calibrate_detector.py, screen_logs.py calibrate)")
     try:
         calibration = calibration_from_dict(data)
     except (KeyError, TypeError, ValueError) as error:

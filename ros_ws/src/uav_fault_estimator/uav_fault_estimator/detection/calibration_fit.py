@@ -1,7 +1,8 @@
 """The detector's calibration from fault-free flights (Blanke & Hansen, section III): the
 RLS's initial parameters by least squares, then, from the detector run over each flight,
 the parameters' spread (optionally scheduled on airspeed) and the Weibull fits of both
-statistics. No ROS here."""
+statistics; and the fast test's: the mean and spread of each generator's residual with
+theta0 fixed, and the Weibull fit of its window statistic. No ROS here."""
 
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ from typing import Any
 import numpy as np
 
 from uav_fault_estimator.detection.calibration import (
+    DEFAULT_FAST_REFERENCE,
+    DEFAULT_FAST_WINDOW,
     DEFAULT_FORGETTING_FACTOR,
     DEFAULT_SAMPLE_PERIOD_S,
     DEFAULT_SETTLE_S,
@@ -19,14 +22,17 @@ from uav_fault_estimator.detection.calibration import (
     SIMULATED_AIRFRAME,
     Calibration,
     ChannelCalibration,
+    FastTestCalibration,
     parameter_deviation,
 )
 from uav_fault_estimator.detection.change_detection import (
+    SlidingMeanChange,
     Weibull,
     weibull_fit,
 )
 from uav_fault_estimator.detection.detector import (
     DetectorFlight,
+    DetectorSample,
     detector_flight,
     flight_regressions,
     run_detector,
@@ -64,26 +70,32 @@ def calibrate(flights: Sequence[Sequence[np.ndarray]],
               forgetting_factor: float = DEFAULT_FORGETTING_FACTOR,
               window: int = DEFAULT_WINDOW, settle_s: float = DEFAULT_SETTLE_S,
               airframe: str = SIMULATED_AIRFRAME, scheduled: bool = False,
-              generators: tuple[str, ...] = SURFACE_GENERATORS) -> Calibration:
+              generators: tuple[str, ...] = SURFACE_GENERATORS,
+              fast_window: int = DEFAULT_FAST_WINDOW,
+              fast_reference: int = DEFAULT_FAST_REFERENCE) -> Calibration:
     """The calibration of airframe's generators (generators.GENERATORS) from fault-free
     flights on the sample grid (DetectorFlight, or (times, states, controls) without
     airspeed), made with (and carrying) the sample period [s], forgetting factor, GLRT
-    window [samples] and settling time [s]: the initial parameters, then, from the RLS and
-    GLRT run over each flight from them, the parameters' spread and the Weibull fits of
-    both statistics. scheduled: the parameters' means affine in the filtered airspeed
+    window [samples], settling time [s] and fast-test window and reference [samples]: the
+    initial
+    parameters, then, from the RLS and GLRT run over each flight from them, the parameters'
+    spread, the Weibull fits of both statistics and the fast test's (fast_calibration).
+    scheduled: the parameters' means affine in the filtered airspeed
     (airspeed_schedule); ScheduleError when the flights' airspeeds span less than
     MIN_SCHEDULE_SPAN_MPS, ValueError when a generator has too few samples."""
     generators = checked_generators(tuple(generators))
     flights = [detector_flight(flight) for flight in flights]
     initial = fit_initial_parameters(flights, generators, sample_period_s, forgetting_factor)
     # The RLS and the GLRT need only theta0 and P0; spread and Weibulls are placeholders.
+    placeholder = FastTestCalibration(1.0, Weibull(1.0, 1.0))
     provisional = Calibration(sample_period_s, forgetting_factor, window, settle_s, {
         name: ChannelCalibration(theta0, p0, np.zeros(theta0.size), np.ones(theta0.size),
-                                 Weibull(1.0, 1.0))
-        for name, (theta0, p0) in initial.items()}, Weibull(1.0, 1.0), airframe)
-    samples = [sample for flight in flights
-               for sample in run_detector(provisional, flight, false_alarm_probability=0.5)
-               if np.isfinite(sample.statistic).all()]
+                                 Weibull(1.0, 1.0), placeholder)
+        for name, (theta0, p0) in initial.items()}, Weibull(1.0, 1.0), airframe,
+        fast_window=fast_window, fast_reference=fast_reference)
+    runs = [run_detector(provisional, flight, false_alarm_probability=0.5) for flight in flights]
+    samples = [sample for run in runs for sample in run if np.isfinite(sample.statistic).all()]
+    fast = fast_calibration(runs, fast_window, fast_reference)
     statistics = np.array([sample.statistic for sample in samples])
     airspeeds = np.array([sample.airspeed_mps for sample in samples])
     reference = airspeed_reference(airspeeds) if scheduled else None
@@ -93,12 +105,36 @@ def calibrate(flights: Sequence[Sequence[np.ndarray]],
         mean, slope, std = (airspeed_schedule(theta, airspeeds - reference) if scheduled
                             else (theta.mean(axis=0), None, theta.std(axis=0)))
         channel = ChannelCalibration(*initial[name], mean, std, weibull_fit(statistics[:, k]),
-                                     slope)
+                                     fast[k], slope)
         offsets = airspeeds - reference if scheduled else 0.0
         deviation = np.maximum(deviation, parameter_deviation(theta, channel, offsets))
         channels[name] = channel
     return Calibration(sample_period_s, forgetting_factor, window, settle_s, channels,
-                       weibull_fit(deviation), airframe, reference)
+                       weibull_fit(deviation), airframe, reference, fast_window, fast_reference)
+
+
+def fast_calibration(runs: Sequence[Sequence[DetectorSample]], window: int, reference: int
+                     ) -> list[FastTestCalibration]:
+    """Per generator, from every sample of each fault-free flight's detector run (the
+    fixed-parameter residual needs no settling): the standard deviation of the residual with
+    theta0 fixed over every flight, and the Weibull fit of its window statistic (`window`
+    samples against the `reference` before them), each flight's windows its own. ValueError
+    when the flights give fewer than ten statistics (the Weibull fit's least)."""
+    residuals = [np.array([sample.fixed_residual for sample in run]) for run in runs if run]
+    statistics_count = sum(max(0, len(flight) - window - reference + 1) for flight in residuals)
+    if statistics_count < 10:
+        raise ValueError(f"the fast test needs ten windows of {window} samples after a "
+                         f"reference of {reference}: the flights give {statistics_count} "
+                         f"(their usable samples: {', '.join(map(str, map(len, residuals)))})")
+    stds = np.vstack(residuals).std(axis=0)
+    fitted = []
+    for k, std in enumerate(stds):
+        statistics = []
+        for flight in residuals:
+            test = SlidingMeanChange(window, reference, float(std))
+            statistics += [z for z in map(test.update, flight[:, k]) if z is not None]
+        fitted.append(FastTestCalibration(float(std), weibull_fit(np.array(statistics))))
+    return fitted
 
 
 class ScheduleError(ValueError):

@@ -5,6 +5,12 @@
   with the median fixed at 0 (H0), b1 = mean |x - median(x)| with the median estimated (H1).
   With those estimates each likelihood is (2 b)^-M exp(-M), so the log ratio is eq. 22.
 - SlidingGlrt: T_L over the last M samples.
+- SlidingMeanChange: the fast test's statistic, the mean of the last W residuals against the
+  mean of the R before them, in units of its fault-free spread (the residuals those of the
+  generator with its parameters fixed): a window test for a change of the mean, which
+  nothing adapts away and a constant offset does not move.
+- per_sample_probability: the per-sample exceedance probability that gives a stated rate of
+  false alarms per flight hour for a window test.
 - weibull_fit / weibull_threshold: the two-parameter Weibull distribution of a statistic
   under H0 (scipy's maximum-likelihood fit, location 0) and the threshold of eq. 25,
   gamma = v (-ln P_FA)^(1/beta), for which P(T > gamma | H0) = P_FA (eq. 23-24).
@@ -43,6 +49,41 @@ class SlidingGlrt:
         if len(self.samples) < self.samples.maxlen:
             return None
         return laplacian_glrt(np.fromiter(self.samples, float))
+
+
+class SlidingMeanChange:
+    """The fast test's statistic: the mean of the last `window` residuals against the mean
+    of the `reference` residuals before them, |m_W - m_R| / (std sqrt(1/W + 1/R)) (None
+    until both are full): about |N(0, 1)| for white residuals of spread std whatever their
+    mean (a new day's bias, trim or sensor offset moves both means alike), and a step d of
+    the mean raises it by about |d| / std / sqrt(1/W + 1/R) within `window` samples."""
+
+    def __init__(self, window: int, reference: int, std: float) -> None:
+        if window < 1 or reference < 1 or not std > 0.0:
+            raise ValueError(f"window test: window {window} and reference {reference} "
+                             f"(>= 1 each), spread {std} (> 0)")
+        self.samples: deque[float] = deque(maxlen=window + reference)
+        self.window = window
+        self.scale = std * math.sqrt(1.0 / window + 1.0 / reference)
+
+    def update(self, residual: float) -> float | None:
+        self.samples.append(residual)
+        if len(self.samples) < self.samples.maxlen:
+            return None
+        values = np.fromiter(self.samples, float)
+        reference, recent = values[:-self.window], values[-self.window:]
+        return abs(recent.mean() - reference.mean()) / self.scale
+
+
+def per_sample_probability(false_alarms_per_hour: float, window: int,
+                           sample_period_s: float) -> float:
+    """The probability per sample that a window test's statistic exceeds its threshold for
+    false_alarms_per_hour false alarms per flight hour: an exceedance lasts about a window
+    (the statistics of overlapping windows share their samples), so an hour of
+    3600 / sample_period_s samples holds about that many over window of them."""
+    if not false_alarms_per_hour > 0.0:
+        raise ValueError(f"false alarms per hour must be > 0, got {false_alarms_per_hour}")
+    return min(false_alarms_per_hour * window * sample_period_s / 3600.0, 0.5)
 
 
 @dataclass(frozen=True)

@@ -17,14 +17,18 @@ from uav_fault_estimator.detection.calibration_file import (
     read_calibration,
     shipped_calibration_path,
 )
-from uav_fault_estimator.detection.detector import SelfTuningDetector
+from uav_fault_estimator.detection.detector import (
+    DEFAULT_FAST_FALSE_ALARMS_PER_HOUR,
+    SelfTuningDetector,
+)
 
 
 @dataclass(frozen=True)
 class DetectorSettings:
     """The self-tuning detector's settings: the vehicle, its calibration file and the
     airframe flown (empty: the vehicle's shipped calibration, the vehicle as simulated), and
-    the designed false-alarm probability per sample of each test."""
+    the designed false-alarm probability per sample of each self-tuning test and the fast
+    test's false alarms per flight hour."""
 
     vehicle: str = declared_setting(VEHICLE_PARAMETER)
     calibration_file: str = setting(
@@ -33,8 +37,13 @@ class DetectorSettings:
     airframe: str = setting("the airframe flown: the calibration must be of it; empty: the "
                             "vehicle as simulated (<vehicle>_sim)", "")
     false_alarm_probability: float = setting(
-        "designed P_FA per sample of each test (eq. 23-25); a change moves the thresholds", 0.01,
+        "designed P_FA per sample of each self-tuning test (GLRT, parameters; eq. 23-25); a "
+        "change moves their thresholds", 0.01,
         1e-9, 0.5, live=True)
+    fast_false_alarms_per_hour: float = setting(
+        "designed false alarms per flight hour of each channel's fast test (window of the "
+        "residuals with the calibration's parameters); a change moves its thresholds",
+        DEFAULT_FAST_FALSE_ALARMS_PER_HOUR, 1e-3, 100.0, live=True)
 
 
 def detector_calibration(settings: DetectorSettings) -> Calibration:
@@ -47,5 +56,6 @@ def detector_calibration(settings: DetectorSettings) -> Calibration:
 
 def self_tuning_detector(settings: DetectorSettings) -> SelfTuningDetector:
     """The detector the settings describe: their calibration, at their false-alarm
-    probability."""
-    return SelfTuningDetector(detector_calibration(settings), settings.false_alarm_probability)
+    probability and fast-test rate."""
+    return SelfTuningDetector(detector_calibration(settings), settings.false_alarm_probability,
+                              settings.fast_false_alarms_per_hour)

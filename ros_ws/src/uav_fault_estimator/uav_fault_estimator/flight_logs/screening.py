@@ -2,9 +2,10 @@
 log's detector samples as alarm intervals, counts and a summary, its table and its figure.
 No ROS here.
 
-Three tests, each per channel (the calibration's generators, in its order): "glrt" the channel's
+Four tests, each per channel (the calibration's generators, in its order): "glrt" the channel's
 GLRT statistic over its threshold, "parameter" the channel's largest normalised parameter
-deviation over the parameter threshold, "combined" both on the same channel (the detector's
+deviation over the parameter threshold, "fast" the channel's fast window test over its
+threshold, "combined" the first two on the same channel or the fast one (the detector's
 combined alarm is raised when some channel's is). An interval is a run of consecutive
 detector samples (one sample period apart: a skipped sample ends it) on which a test
 alarmed on a channel, from the first such sample's time to the last's.
@@ -31,7 +32,7 @@ from uav_fault_estimator.detection.detector import DetectorSample
 from uav_fault_estimator.flight_logs.resample import DetectorInputs
 from uav_fault_estimator.reporting.figures import save_figure, shade_alarms
 
-TESTS = ("glrt", "parameter", "combined")
+TESTS = ("glrt", "parameter", "fast", "combined")
 COMBINED = "combined"
 # Times in the outputs: the grid's stamps are whole microseconds (sample_grid).
 TIME_DECIMALS = 6
@@ -56,7 +57,9 @@ def channel_alarms(samples: Sequence[DetectorSample], channels: int) -> dict[str
     glrt = np.array([sample.alarm for sample in samples], dtype=bool).reshape(-1, channels)
     parameter = np.array([sample.parameter_deviation > sample.parameter_threshold
                           for sample in samples], dtype=bool).reshape(-1, channels)
-    return {"glrt": glrt, "parameter": parameter, COMBINED: glrt & parameter}
+    fast = np.array([sample.fast_alarm for sample in samples], dtype=bool).reshape(-1, channels)
+    return {"glrt": glrt, "parameter": parameter, "fast": fast,
+            COMBINED: (glrt & parameter) | fast}
 
 
 def raised_runs(times_s: np.ndarray, raised: np.ndarray,

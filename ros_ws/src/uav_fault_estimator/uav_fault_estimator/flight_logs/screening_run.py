@@ -36,6 +36,7 @@ from uav_fault_estimator.flight_logs.loading import (
     load_logs,
 )
 from uav_fault_estimator.flight_logs.screening import (
+    TESTS,
     alarm_intervals,
     alarm_table,
     log_summary,
@@ -203,13 +204,19 @@ def screened_log(name: str, log: LoadedLog, calibration: Calibration,
     inputs = replay.inputs
     channels, period_s = calibration.channel_names, calibration.sample_period_s
     samples = run_detector(calibration, inputs.flight, false_alarm_probability)
+    if not samples:
+        raise BadInputError(
+            f"{name}: the calibration's generators ({', '.join(channels)}) ran on none of its "
+            "samples: the log lacks a value they take (the tracking generators need the "
+            "autopilot's roll and pitch setpoints); use a calibration of generators it "
+            "carries (screen_logs.py calibrate --generators)")
     intervals = alarm_intervals(samples, channels, period_s)
     summary = log_summary(name, replay.source, samples, channels, period_s, inputs.warnings,
                           inputs.start_stamp_s)
     counts = summary["alarm_samples"]
     print(f"{name}: {summary['samples']} samples, {summary['tested_samples']} tested; "
-          "alarm samples glrt {}, parameter {}, combined {}; first combined alarm {}"
-          .format(*(counts[test]["any"] for test in ("glrt", "parameter", "combined")),
+          "alarm samples glrt {}, parameter {}, fast {}, combined {}; first combined alarm {}"
+          .format(*(counts[test]["any"] for test in TESTS),
                   "none" if summary["first_combined_alarm_s"] is None
                   else f"at {summary['first_combined_alarm_s']:.1f} s"))
     print(alarm_table(intervals))

@@ -4,7 +4,8 @@ Subscribes `state` and `controls` (matched by stamp), and where they come `air_d
 airspeed, for a calibration scheduled on airspeed) and `autopilot_setpoints` (for the
 tracking generators); on the calibration's sample grid (every 0.2 s of sim time) runs the
 calibration's RLS residual generators, their GLRT and the parameter-deviation test
-(detection/; Blanke & Hansen), with the forgetting factor, window and settling time the
+(detection/; Blanke & Hansen) and beside them the fast window test on the residuals with the
+calibration's parameters, with the forgetting factor, windows and settling time the
 calibration was made with, and publishes `faults/alarm` (FaultAlarm, stamped like the
 sample), and `/diagnostics`.
 """
@@ -87,9 +88,16 @@ class DetectorNode(Node):
         self.counts = {"published": 0, "combined_alarms": 0}
 
     def retune(self, changes: dict[str, Any]) -> None:
-        """The thresholds for a changed false-alarm probability, from the next sample on."""
-        self.detector.set_false_alarm_probability(changes["false_alarm_probability"])
-        self.get_logger().info(f"thresholds for P_FA = {changes['false_alarm_probability']:g}")
+        """The thresholds for a changed false-alarm probability or fast-test rate, from the
+        next sample on."""
+        if "false_alarm_probability" in changes:
+            self.detector.set_false_alarm_probability(changes["false_alarm_probability"])
+            self.get_logger().info(
+                f"thresholds for P_FA = {changes['false_alarm_probability']:g}")
+        if "fast_false_alarms_per_hour" in changes:
+            self.detector.set_fast_false_alarm_rate(changes["fast_false_alarms_per_hour"])
+            self.get_logger().info("fast-test thresholds for "
+                                   f"{changes['fast_false_alarms_per_hour']:g} per hour")
 
     def process(self, time_s: float, payloads: dict) -> None:
         skipped = self.detector.skipped_samples
@@ -117,15 +125,22 @@ class DetectorNode(Node):
             parameter_deviation=sample.parameter_deviation.tolist(),
             parameter_threshold=sample.parameter_threshold,
             parameter_alarm=sample.parameter_alarm,
+            fast_statistic=sample.fast_statistic.tolist(),
+            fast_threshold=sample.fast_threshold.tolist(),
+            fast_alarm=sample.fast_alarm.tolist(),
             combined_alarm=sample.combined_alarm,
             false_alarm_probability=self.detector.false_alarm_probability,
+            fast_false_alarms_per_hour=self.detector.fast_false_alarms_per_hour,
         )
 
     def report(self, sample: DetectorSample) -> None:
-        alarms = [name for name, on in zip(self.detector.calibration.channel_names, sample.alarm,
-                                           strict=True) if on]
+        names = self.detector.calibration.channel_names
+        alarms = [name for name, on in zip(names, sample.alarm, strict=True) if on]
+        fast = [name for name, on in zip(names, sample.fast_alarm, strict=True) if on]
         if sample.combined_alarm:
-            level, text = ERROR, "control-surface fault: GLRT and parameters agree"
+            level, text = ERROR, "fault: " + "; ".join(
+                (["GLRT and parameters agree"] if sample.self_tuning_alarm else [])
+                + ([f"fast test on {', '.join(fast)}"] if fast else []))
         elif alarms or sample.parameter_alarm:
             level, text = WARN, "one test alarms: " + ", ".join(
                 alarms + (["parameters"] if sample.parameter_alarm else []))
