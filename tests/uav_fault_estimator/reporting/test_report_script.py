@@ -190,8 +190,8 @@ def test_the_table_of_a_flight_shorter_than_settling_shows_no_figures():
 @pytest.mark.timeout(30)
 def test_the_table_tells_the_estimators_figures_from_the_detectors():
     """The Carbon-Z demo's metrics (docs/demo_carbon_z_default.json): its "none" is the
-    estimator's false alarms, its yaw test's 5 fault-free alarms the detector's; each delay
-    says what it counts from."""
+    estimator's false alarms, its lateral_force test's alarm 2.4 s after the first fault
+    starts the detector's; each delay says what it counts from."""
     metrics = json.loads((REPO_ROOT / "docs" / "demo_carbon_z_default.json").read_text())
     lines = report.table(metrics).splitlines()
     rows = 2 + len(metrics["faults"])
@@ -202,10 +202,10 @@ def test_the_table_tells_the_estimators_figures_from_the_detectors():
         "estimator false alarms (an estimate at the threshold while its seeded value was below "
         "it, after settle): none"]
     detector = lines.index("detector (detector_node's own alarms, apart from the estimates): "
-                           "designed P_FA 0.01 per sample; 100 tested fault-free samples "
+                           "designed P_FA 0.01 per sample; 99 tested fault-free samples "
                            "before the first fault starts")
-    assert lines[detector + 3] == ("  yaw         fault-free alarms    5, first alarm after the "
-                                   "first fault starts: 125.0 s")
+    assert lines[detector + 3] == ("  lateral_force fault-free alarms    0, first alarm after "
+                                   "the first fault starts: 2.4 s")
     assert len(lines) == detector + 1 + len(metrics["alarms"]["tests"])
 
 

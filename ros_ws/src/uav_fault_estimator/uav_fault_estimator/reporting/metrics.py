@@ -125,7 +125,8 @@ _TIME_STATISTICS = (("median_ms", np.median), ("p99_ms", lambda t: np.percentile
 class AlarmSeries:
     """What detector_node published: stamps (K,) [s]; per-channel GLRT alarms (K, c), the
     parameter alarm (K,) and the combined alarm (K,); whether the tests ran (K,) (not while
-    the window fills and the RLS settles); the designed P_FA."""
+    the window fills and the RLS settles); the designed P_FA; per-channel fast-test alarms
+    (K, c)."""
 
     channel_names: Sequence[str]
     stamps_s: np.ndarray
@@ -134,10 +135,12 @@ class AlarmSeries:
     combined_alarm: np.ndarray
     tested: np.ndarray
     false_alarm_probability: float
+    fast_alarm: np.ndarray
 
 
 def alarm_metrics(alarms: AlarmSeries, seeded: SeededSeries) -> dict:
-    """Per test (each GLRT channel, the parameters, the combined alarm): the alarms in
+    """Per test (each GLRT channel, the parameters, each fast-test channel, the combined
+    alarm): the alarms in
     fault-free time (tested samples before the first seeded fault starts, or the whole
     flight), as a count and as a rate per sample to hold against the designed P_FA, and the
     first alarm's delay after that start."""
@@ -147,7 +150,10 @@ def alarm_metrics(alarms: AlarmSeries, seeded: SeededSeries) -> dict:
               else np.ones(alarms.stamps_s.size, dtype=bool))
     fault_free = before & alarms.tested
     tests = {name: alarms.alarm[:, k] for k, name in enumerate(alarms.channel_names)}
-    tests |= {"parameters": alarms.parameter_alarm, "combined": alarms.combined_alarm}
+    tests |= {"parameters": alarms.parameter_alarm}
+    tests |= {f"fast_{name}": alarms.fast_alarm[:, k]
+              for k, name in enumerate(alarms.channel_names)}
+    tests |= {"combined": alarms.combined_alarm}
     summary = {}
     for name, raised in tests.items():
         raised = np.asarray(raised, dtype=bool)

@@ -93,6 +93,7 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
         combined_alarm=np.array([m.combined_alarm for m in alarms], dtype=bool),
         tested=np.array([np.isfinite(m.statistic).all() for m in alarms], dtype=bool),
         false_alarm_probability=float(alarms[0].false_alarm_probability),
+        fast_alarm=np.array([m.fast_alarm for m in alarms], dtype=bool),
     )
 
 
