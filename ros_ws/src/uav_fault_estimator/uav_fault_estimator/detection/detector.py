@@ -53,7 +53,7 @@ from uav_fault_estimator.detection.rls import RecursiveLeastSquares
 # The fast test's designed false alarms per flight hour, each channel. Chosen on ALFA's
 # flights leaving a day out (docs/detector.md): at 1 and 0.1 per hour a new day's
 # fault-free stretches raised it on 7 and 2 flights, at 0.01 on none; on the simulated dev
-# flights 0.01 found as many failures within 5 s as 1.
+# flights 0.01 found about as many failures within 5 s as 1.
 DEFAULT_FAST_FALSE_ALARMS_PER_HOUR = 0.01
 
 
