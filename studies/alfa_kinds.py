@@ -67,6 +67,10 @@ ONSET_RANGE_S = (60.0, 120.0)
 AFTER_ONSET_S = 30.0
 WITHIN_S = 5.0  # ALFA's evaluator: a detection later than this is a miss
 FAULT_FREE = "fault_free"
+# The kind an alarm should name for each failure (generators.FAILURE_GENERATORS' kinds).
+NAMED_AS = {"aileron_stuck": "aileron", "left_aileron_stuck": "aileron",
+            "right_aileron_stuck": "aileron", "elevator_stuck": "elevator",
+            "rudder_stuck": "rudder", "engine_cut": "engine"}
 # The matched filter's signal-to-noise ratio for 90 % detection at a 5 % false-alarm rate.
 REQUIRED_SNR = NormalDist().inv_cdf(0.95) + NormalDist().inv_cdf(0.90)
 
@@ -126,33 +130,38 @@ def signal_to_noise(failed: GridFlight, twin_flight: GridFlight, calibration: Ca
 
 
 def first_alarms(flight: GridFlight, calibration: Calibration, false_alarm_probability: float,
-                 onset_s: float) -> tuple[float | None, bool]:
-    """The first combined alarm's delay after the onset [s] (None: none), and whether one
-    came before it (any alarm at all on a fault-free flight, onset nan)."""
-    alarms = [sample.time_s for sample in run_detector(
+                 onset_s: float) -> tuple[float | None, bool, str]:
+    """The first combined alarm's delay after the onset [s] (None: none), whether one came
+    before it (any alarm at all on a fault-free flight, onset nan), and the kind the first
+    one after the onset names (empty: none)."""
+    alarms = [(sample.time_s, sample.cause) for sample in run_detector(
         calibration, flight.detector_flight, false_alarm_probability)
         if sample.combined_alarm]
     if np.isnan(onset_s):
-        return None, bool(alarms)
-    after = [t - onset_s for t in alarms if t >= onset_s]
-    return (float(after[0]) if after else None), any(t < onset_s for t in alarms)
+        return None, bool(alarms), ""
+    after = [(t - onset_s, cause) for t, cause in alarms if t >= onset_s]
+    return ((float(after[0][0]) if after else None), any(t < onset_s for t, _ in alarms),
+            after[0][1] if after else "")
 
 
-def summary(rows: list[tuple[str, float, float | None, bool, float]]) -> dict:
-    """Per kind: found within WITHIN_S, found at all, delays, false alarms before onset, and
-    the flights whose signal-to-noise ratio reaches REQUIRED_SNR (rows: kind, onset,
-    delay, early alarm, signal-to-noise ratio)."""
+def summary(rows: list[tuple[str, float, float | None, bool, str, float]]) -> dict:
+    """Per kind: found within WITHIN_S, found at all, delays, false alarms before onset, the
+    found flights whose first alarm names the kind's failed part (NAMED_AS), and the flights
+    whose signal-to-noise ratio reaches REQUIRED_SNR (rows: kind, onset, delay, early alarm,
+    named kind, signal-to-noise ratio)."""
     result = {}
     for kind in (*ACTUATOR_FAULT_NAMES, FAULT_FREE):
         mine = [row for row in rows if row[0] == kind]
         delays = [row[2] for row in mine if row[2] is not None]
-        ratios = [row[4] for row in mine]
+        ratios = [row[5] for row in mine]
         result[kind] = {
             "flights": len(mine),
             "false_alarm_flights": int(sum(row[3] for row in mine)),
             **({} if kind == FAULT_FREE else {
                 "found_within_5_s": int(sum(d <= WITHIN_S for d in delays)),
                 "found": len(delays),
+                "named_right": int(sum(row[2] is not None and row[4] == NAMED_AS[kind]
+                                       for row in mine)),
                 "median_delay_s": float(np.median(delays)) if delays else None,
                 "largest_delay_s": float(max(delays)) if delays else None,
                 "detectable_within_5_s": int(sum(r >= REQUIRED_SNR for r in ratios)),
@@ -161,17 +170,18 @@ def summary(rows: list[tuple[str, float, float | None, bool, float]]) -> dict:
 
 
 def print_table(result: dict) -> None:
-    print(f"{'kind':<20}{'within 5 s':>11}{'found':>7}{'median s':>10}{'largest s':>10}"
-          f"{'early alarms':>14}{'detectable':>12}{'median SNR':>12}")
+    print(f"{'kind':<20}{'within 5 s':>11}{'found':>7}{'named':>7}{'median s':>10}"
+          f"{'largest s':>10}{'early alarms':>14}{'detectable':>12}{'median SNR':>12}")
     for kind, entry in result.items():
         if kind == FAULT_FREE:
-            print(f"{'fault-free':<20}{'':>11}{'':>7}{'':>10}{'':>10}"
+            print(f"{'fault-free':<20}{'':>11}{'':>7}{'':>7}{'':>10}{'':>10}"
                   f"{entry['false_alarm_flights']:>9} of {entry['flights']}")
             continue
         median = "-" if entry["median_delay_s"] is None else f"{entry['median_delay_s']:.1f}"
         largest = "-" if entry["largest_delay_s"] is None else f"{entry['largest_delay_s']:.1f}"
         print(f"{kind:<20}{entry['found_within_5_s']:>6} of {entry['flights']:<2}"
-              f"{entry['found']:>5}{median:>10}{largest:>10}{entry['false_alarm_flights']:>14}"
+              f"{entry['found']:>5}{entry['named_right']:>7}{median:>10}{largest:>10}"
+              f"{entry['false_alarm_flights']:>14}"
               f"{entry['detectable_within_5_s']:>12}{entry['median_signal_to_noise']:>12.1f}")
 
 

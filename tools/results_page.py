@@ -426,7 +426,7 @@ def alfa_kinds_in_simulation(data: Mapping[str, Any]) -> list[str]:
     lines = [f"Vehicle `{data['vehicle']}`, {data['flights_per_kind']} flights per kind, "
              f"generators {', '.join(data['generators'])}, found within "
              f"{number(data['within_s'])} s of the onset:", ""]
-    keys = ("found_within_5_s", "found", "median_delay_s", "largest_delay_s",
+    keys = ("found_within_5_s", "found", "named_right", "median_delay_s", "largest_delay_s",
             "false_alarm_flights", "detectable_within_5_s", "median_signal_to_noise")
     lines += table(("kind", "flights", *keys), (
         (kind, entry["flights"], *(entry.get(key) for key in keys))
@@ -573,7 +573,9 @@ SECTIONS = (
             "settings. detectable_within_5_s: the flights whose failure, against its twin "
             "flown without it, moves the generators' residuals within 5 s by the matched "
             "filter's signal-to-noise ratio for 90 % detection at 5 % false alarms (2.93): "
-            "the most any detector on these residuals could find (docs/detector.md)."),
+            "the most any detector on these residuals could find; named_right: the found "
+            "flights whose first alarm names the failed part (aileron, elevator, rudder, "
+            "engine; docs/detector.md)."),
     Section("The Carbon-Z model on ALFA flights", "alfa_model_fit.json",
             "python -m studies.alfa_model_fit ALFA/ --vehicle carbon_z --json "
             "docs/alfa_model_fit.json", alfa_model_fit,

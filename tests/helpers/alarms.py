@@ -27,3 +27,4 @@ def assert_alarms_are_the_cores(alarms: Sequence[Any], offline: Sequence[Any]) -
                                [s.fast_statistic for s in offline], rtol=1e-9, equal_nan=True)
     assert [list(m.fast_alarm) for m in alarms] == [s.fast_alarm.tolist() for s in offline]
     assert [m.combined_alarm for m in alarms] == [s.combined_alarm for s in offline]
+    assert [m.cause for m in alarms] == [s.cause for s in offline]

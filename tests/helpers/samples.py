@@ -77,6 +77,7 @@ SAMPLE_FIELDS: dict[str, dict[str, Any]] = {
         "combined_alarm": True,
         "false_alarm_probability": 0.001,
         "fast_false_alarms_per_hour": 1.0,
+        "cause": "elevator",
     },
 }
 

@@ -12,7 +12,7 @@ ALARM_FIELDS = [
     "float64[] parameter_deviation", "float64 parameter_threshold", "bool parameter_alarm",
     "float64[] fast_statistic", "float64[] fast_threshold", "bool[] fast_alarm",
     "bool combined_alarm", "float64 false_alarm_probability",
-    "float64 fast_false_alarms_per_hour",
+    "float64 fast_false_alarms_per_hour", "string cause",
 ]
 HEADER = ["std_msgs/Header header", "\tbuiltin_interfaces/Time stamp", "\t\tint32 sec",
           "\t\tuint32 nanosec", "\tstring frame_id"]

@@ -198,8 +198,9 @@ def test_a_rate_per_hour_is_a_probability_per_sample_of_a_window():
 @pytest.mark.timeout(30)
 def test_the_fast_test_alarms_within_its_window_of_a_step_the_rls_would_absorb():
     """A roll channel p = a da + b, the calibration's a = b = 0.5 fixed: a step of b by 10
-    residual spreads after the detector settled raises the fast test within its window; the
-    thresholds follow the designed rate per hour."""
+    residual spreads after the detector settled raises the fast test within its window, and
+    the alarm names the roll channel's kind; the thresholds follow the designed rate per
+    hour."""
     calibration = small_calibration()
     detector = SelfTuningDetector(calibration, 0.01, fast_false_alarms_per_hour=2.0)
     probability = per_sample_probability(2.0, calibration.fast_window, 0.2)
@@ -218,6 +219,7 @@ def test_the_fast_test_alarms_within_its_window_of_a_step_the_rls_would_absorb()
         if sample is not None and sample.fast_alarm[0] and first_s is None:
             first_s = time_s
             assert sample.combined_alarm and not sample.fast_alarm[2]
+            assert sample.cause == "aileron"  # the roll channel's kind
     assert step_s <= first_s < step_s + calibration.fast_window * 0.2
 
 

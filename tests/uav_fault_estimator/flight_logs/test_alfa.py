@@ -107,7 +107,7 @@ def test_an_airspeed_of_zero_throughout_is_none_and_said(exports, tmp_path: Path
 @pytest.mark.timeout(30)
 def test_the_truth_of_alfa_folders_and_of_a_table(exports, tmp_path: Path) -> None:
     assert alfa_truth(exports[1]) == FlightTruth("aileron", ONSET_NS * 1e-9)
-    assert alfa_truth(exports[1]).expected_channels == ("roll", "roll_tracking")
+    assert alfa_truth(exports[1]).expected_channels == ("roll", "roll_rudder", "roll_tracking")
     assert alfa_truth(exports[0]) == NO_FAILURE
     unlabelled = tmp_path / "carbonZ_2018-07-18-12-10-11_no_ground_truth"
     unlabelled.mkdir()

@@ -42,6 +42,7 @@ from uav_fault_estimator.detection.change_detection import (
     weibull_threshold,
 )
 from uav_fault_estimator.detection.generators import (
+    KIND_OF_GENERATOR,
     NO_SETPOINTS,
     SETPOINTS,
     GridSample,
@@ -84,7 +85,9 @@ class DetectorSample:
     the window fills or the RLS settles), threshold, alarm and parameter deviation; the
     parameter threshold and alarm; per channel the fast test's residual (parameters fixed),
     statistic (NaN while its window fills or the RLS settles), threshold and alarm; the
-    combined alarm (either test); each channel's parameters."""
+    combined alarm (either test); each channel's parameters; and the failure kind the
+    combined alarm names (generators.FAILURE_GENERATORS: that of the channel whose alarming
+    test lies furthest over its threshold; empty without one)."""
 
     time_s: float
     residual: np.ndarray
@@ -101,6 +104,7 @@ class DetectorSample:
     combined_alarm: bool
     theta: dict[str, np.ndarray]
     airspeed_mps: float  # the filtered airspeed the schedule used (NaN: none known)
+    cause: str = ""
 
     @property
     def self_tuning_alarm(self) -> bool:
@@ -260,6 +264,7 @@ class SelfTuningDetector:
         alarm = statistic > self.thresholds  # NaN compares False
         deviates = deviation > self.parameter_threshold
         fast_alarm = fast > self.fast_thresholds
+        names = self.calibration.channel_names
         return DetectorSample(
             time_s=time_s, residual=np.array(residual), statistic=statistic,
             threshold=self.thresholds.copy(), alarm=alarm, parameter_deviation=deviation,
@@ -269,6 +274,8 @@ class SelfTuningDetector:
             fast_alarm=fast_alarm,
             combined_alarm=bool(np.any(alarm & deviates) or fast_alarm.any()), theta=theta,
             airspeed_mps=self.filtered_airspeed_mps,
+            cause=alarm_cause(names, np.where(alarm & deviates, statistic / self.thresholds, 0.0),
+                              np.where(fast_alarm, fast / self.fast_thresholds, 0.0)),
         )
 
     def airspeed_offset_mps(self, airspeed_mps: float) -> float:
@@ -277,6 +284,17 @@ class SelfTuningDetector:
         filtered = self.filter_airspeed(airspeed_mps)
         reference = self.calibration.reference_airspeed_mps
         return 0.0 if reference is None else filtered - reference
+
+
+def alarm_cause(channel_names: Sequence[str], self_tuning_ratio: np.ndarray,
+                fast_ratio: np.ndarray) -> str:
+    """The failure kind of the channel whose alarming test lies furthest over its threshold:
+    ratios (per channel) of statistic to threshold where the test alarms, 0 elsewhere; empty
+    when none alarms, and for a generator of no kind."""
+    strength = np.maximum(self_tuning_ratio, fast_ratio)
+    if not np.any(strength > 0.0):
+        return ""
+    return KIND_OF_GENERATOR.get(channel_names[int(np.argmax(strength))], "")
 
 
 def run_detector(calibration: Calibration, flight: Sequence[np.ndarray],

@@ -175,6 +175,17 @@ GENERATORS: Mapping[str, Generator] = {generator.name: generator for generator i
     Generator("longitudinal_force", ("c_fx",), True, _longitudinal_force),
     Generator("propulsion", ("a_tg", "b_tn", "c_t"), False, _propulsion),
 )}
+# The failure kinds (ALFA's words) and the generators that read what each failed part acts
+# on: the surface's own axis (open loop, and its loop's tracking; the rudder's sideslip, in
+# the side force), the engine's energy (the throttle it needs, the climb it can no longer
+# hold, the thrust it no longer gives). An alarm names the kind of its strongest channel.
+FAILURE_GENERATORS: Mapping[str, tuple[str, ...]] = {
+    "aileron": ("roll", "roll_rudder", "roll_tracking"),
+    "elevator": ("pitch", "pitch_tracking"),
+    "rudder": ("yaw", "yaw_rudder", "lateral_force"),
+    "engine": ("propulsion", "climb_tracking", "longitudinal_force")}
+KIND_OF_GENERATOR = {generator: kind for kind, generators in FAILURE_GENERATORS.items()
+                     for generator in generators}
 # The paper's three.
 SURFACE_GENERATORS = ("roll", "pitch", "yaw")
 # What a vehicle's shipped calibration uses: the autopilot's intent against the aircraft's

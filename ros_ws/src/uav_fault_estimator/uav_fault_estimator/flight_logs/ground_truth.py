@@ -18,16 +18,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from uav_fault_estimator.detection.generators import FAILURE_GENERATORS
 from uav_fault_estimator.flight_logs.csv_logs import csv_files
 
-# The failures ALFA injects, and the detector channels (generators.GENERATORS) that read
-# what each failed part acts on: the surface's own axis (open loop, and its loop's tracking;
-# the rudder's sideslip, in the side force), the engine's energy (the throttle it needs, the
-# climb it can no longer hold, the thrust it no longer gives).
-EXPECTED_CHANNELS: Mapping[str, tuple[str, ...]] = {
-    "aileron": ("roll", "roll_tracking"), "elevator": ("pitch", "pitch_tracking"),
-    "rudder": ("yaw", "lateral_force"), "engine": ("propulsion", "climb_tracking",
-                                                          "longitudinal_force")}
+# The failures ALFA injects, and the detector channels that read what each failed part acts
+# on (detection.generators, the one home of that table).
+EXPECTED_CHANNELS: Mapping[str, tuple[str, ...]] = FAILURE_GENERATORS
 FAILURE_KINDS = tuple(EXPECTED_CHANNELS)
 # ALFA's failure_status topics by the part they name (`engines` for the engine).
 _ALFA_PARTS = {"failure_status_engines": "engine", "failure_status_aileron": "aileron",

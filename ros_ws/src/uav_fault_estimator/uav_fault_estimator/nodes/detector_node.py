@@ -131,6 +131,7 @@ class DetectorNode(Node):
             combined_alarm=sample.combined_alarm,
             false_alarm_probability=self.detector.false_alarm_probability,
             fast_false_alarms_per_hour=self.detector.fast_false_alarms_per_hour,
+            cause=sample.cause,
         )
 
     def report(self, sample: DetectorSample) -> None:
@@ -138,7 +139,7 @@ class DetectorNode(Node):
         alarms = [name for name, on in zip(names, sample.alarm, strict=True) if on]
         fast = [name for name, on in zip(names, sample.fast_alarm, strict=True) if on]
         if sample.combined_alarm:
-            level, text = ERROR, "fault: " + "; ".join(
+            level, text = ERROR, f"fault ({sample.cause or 'kind unknown'}): " + "; ".join(
                 (["GLRT and parameters agree"] if sample.self_tuning_alarm else [])
                 + ([f"fast test on {', '.join(fast)}"] if fast else []))
         elif alarms or sample.parameter_alarm:
