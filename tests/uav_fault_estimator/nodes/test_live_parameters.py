@@ -92,8 +92,10 @@ def test_sim_node_changes_pace_in_flight(short_scenario, start_process, graph):
         return float(1.0 / fit.x[1])
 
     at_first = pace(2.0)
-    assert param_set("/sim_node", "real_time_factor", "10.0") == "Set parameter successful"
+    # 4 times, not 10: under the full suite's load on two cores sim_node made 7.7 of 10
+    # (its steps, not their delivery, fell behind), which says nothing of the parameter
+    assert param_set("/sim_node", "real_time_factor", "4.0") == "Set parameter successful"
     faster = pace(2.0)
     print(f"real-time factor measured: {at_first:.2f}, then {faster:.2f}")
     assert at_first == pytest.approx(1.0, rel=0.05)
-    assert faster == pytest.approx(10.0, rel=0.05)
+    assert faster == pytest.approx(4.0, rel=0.05)
