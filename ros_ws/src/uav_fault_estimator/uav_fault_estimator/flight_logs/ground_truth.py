@@ -21,10 +21,8 @@ from pathlib import Path
 from uav_fault_estimator.detection.generators import FAILURE_GENERATORS
 from uav_fault_estimator.flight_logs.csv_logs import csv_files
 
-# The failures ALFA injects, and the detector channels that read what each failed part acts
-# on (detection.generators, the one home of that table).
-EXPECTED_CHANNELS: Mapping[str, tuple[str, ...]] = FAILURE_GENERATORS
-FAILURE_KINDS = tuple(EXPECTED_CHANNELS)
+# The failures ALFA injects (their channels: detection.generators.FAILURE_GENERATORS).
+FAILURE_KINDS = tuple(FAILURE_GENERATORS)
 # ALFA's failure_status topics by the part they name (`engines` for the engine).
 _ALFA_PARTS = {"failure_status_engines": "engine", "failure_status_aileron": "aileron",
                "failure_status_elevator": "elevator", "failure_status_rudder": "rudder"}
@@ -47,7 +45,7 @@ class FlightTruth:
     def expected_channels(self) -> tuple[str, ...]:
         """The channels that see this failure (none without one)."""
         return tuple(channel for kind in (self.failure or "").split("+") if kind
-                     for channel in EXPECTED_CHANNELS[kind])
+                     for channel in FAILURE_GENERATORS[kind])
 
 
 NO_FAILURE = FlightTruth(None, None)
@@ -105,7 +103,7 @@ def _truth_row(path: Path, number: int, row: list[str],
         if onset:
             raise ValueError(f"{where}: an onset without a failure")
         return log, NO_FAILURE
-    unknown = [kind for kind in failure.split("+") if kind not in EXPECTED_CHANNELS]
+    unknown = [kind for kind in failure.split("+") if kind not in FAILURE_GENERATORS]
     if unknown:
         raise ValueError(f"{where}: failure {unknown[0]!r} is not one of "
                          f"{', '.join(FAILURE_KINDS)} (join several with +)")
