@@ -7,10 +7,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
-from uav_aircraft import vehicles
+from helpers.repo import REPO_ROOT
+from uav_aircraft import paths, vehicles
 from uav_aircraft.fdm import M_PER_FT, create_fdm
 from uav_aircraft.paths import aircraft_dir
 from uav_aircraft.propeller import Propeller
@@ -145,3 +147,12 @@ def test_alfas_failures_pin_the_output_they_name(vehicle):
     rpm = [s.state[ENGINE_SPEED] for s in cut]
     print(f"{vehicle}: engine speed {rpm[0]:.0f} rpm before the cut, {rpm[-1]:.0f} rpm 8 s on")
     assert rpm[-1] < 0.7 * rpm[0]  # windmilling, no longer driven
+
+
+@pytest.mark.timeout(30)
+def test_calibration_commands_write_into_the_source_trees_vehicle_folder():
+    """Whether the code runs from the install space (as here) or the source tree, a
+    calibration command's default output is the vehicle's folder in ros_ws/src."""
+    assert Path(paths.__file__).resolve().is_relative_to(REPO_ROOT / "ros_ws" / "install")
+    assert paths.calibration_output_path("carbon_z", vehicles.FAILURE_SIGNATURES_FILE) == (
+        REPO_ROOT / "ros_ws/src/uav_aircraft/aircraft/carbon_z/failure_signatures.yaml")

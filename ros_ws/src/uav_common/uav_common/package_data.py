@@ -6,12 +6,15 @@ from typing import Any
 
 import yaml
 
-_SOURCE_PACKAGES = Path(__file__).resolve().parents[2]  # ros_ws/src in a checkout
-
 
 def source_dir(package: str) -> Path:
-    """The package's folder in this source tree (ros_ws/src/<package>)."""
-    return _SOURCE_PACKAGES / package
+    """The package's folder in this source tree (ros_ws/src/<package>), whether this module
+    runs from the source tree or from the workspace's install space (a copy of it under
+    ros_ws/install)."""
+    here = Path(__file__).resolve()
+    workspace = next((folder for folder in here.parents
+                      if (folder / "src" / "uav_common").is_dir()), here.parents[2].parent)
+    return workspace / "src" / package
 
 
 def share_dir(package: str) -> Path:
