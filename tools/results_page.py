@@ -420,14 +420,21 @@ def calibration_bias(data: Mapping[str, Any]) -> list[str]:
 # --- demo runs (metrics.json of scripts/demo.sh) ----------------------------------------
 
 
-def alfa_kinds_in_simulation(data: Mapping[str, Any]) -> list[str]:
-    """ALFA's failure kinds seeded in simulation: per kind, found within the limit, found
-    at all, the delays and the early alarms; the fault-free flights with an alarm."""
-    lines = [f"Vehicle `{data['vehicle']}`, {data['flights_per_kind']} flights per kind, "
-             f"generators {', '.join(data['generators'])}, found within "
-             f"{number(data['within_s'])} s of the onset:", ""]
-    keys = ("found_within_5_s", "found", "named_right", "median_delay_s", "largest_delay_s",
-            "false_alarm_flights", "detectable_within_5_s", "median_signal_to_noise")
+def failure_kinds(data: Mapping[str, Any]) -> list[str]:
+    """Each failure kind and model fault seeded in simulation: per kind, the flights the
+    twin bound calls detectable within the limit, those the detector finds within it (of
+    them), found at all, named right, the detector's and the bound's median delays, the
+    largest delay and the early alarms; the fault-free flights with an alarm."""
+    magnitudes = ", ".join(f"{name} {number(pct)} %" for name, pct in
+                           data["magnitudes_pct"].items())
+    lines = [f"Vehicle `{data['vehicle']}`, {data['flights_per_kind']} flights per kind "
+             f"(seeds from {data['first_seed']}), generators {', '.join(data['generators'])}; "
+             f"model faults as steps and as ramps over {number(data['ramp_s'])} s ({magnitudes}),"
+             f" delays from the onset (a ramp's: from reaching 2 %), found within "
+             f"{number(data['within_s'])} s:", ""]
+    keys = ("detectable_within_5_s", "found_within_5_s", "detectable_found_within_5_s",
+            "found", "named_right", "median_delay_s", "median_bound_delay_s",
+            "largest_delay_s", "false_alarm_flights")
     lines += table(("kind", "flights", *keys), (
         (kind, entry["flights"], *(entry.get(key) for key in keys))
         for kind, entry in data["kinds"].items()))
@@ -561,21 +568,24 @@ SECTIONS = (
             "python -m benchmarks.bench_campaigns --json docs/campaigns.json", campaigns,
             "The campaign layer: flights in one process against local Dask workers, the "
             "per-task cost, and the plan for a large map (docs/performance.md)."),
-    Section("ALFA failures in simulation", "alfa_kinds_*.json",
-            "python -m studies.alfa_kinds --vehicle carbon_z --first-seed 901 --json "
-            "docs/alfa_kinds_carbon_z.json && python -m studies.alfa_kinds --vehicle "
-            "aerosonde --first-seed 901 --json docs/alfa_kinds_aerosonde.json",
-            alfa_kinds_in_simulation,
-            "ALFA's failure kinds (surfaces stuck at 0, the engine cut) seeded into each "
-            "vehicle's fault-free flights at onsets of 60-120 s, the detector offline with the "
-            "vehicle's shipped calibration and defaults (the fast test beside the self-tuning "
-            "one), on seeds from 901: not the dev seeds (from 501) that chose the fast test's "
-            "settings. detectable_within_5_s: the flights whose failure, against its twin "
-            "flown without it, moves the generators' residuals within 5 s by the matched "
-            "filter's signal-to-noise ratio for 90 % detection at 5 % false alarms (2.93): "
-            "the most any detector on these residuals could find; named_right: the found "
-            "flights whose first alarm names the failed part (aileron, elevator, rudder, "
-            "engine; docs/detector.md)."),
+    Section("Failures in simulation", "failure_kinds_*.json",
+            "python -m studies.failure_kinds --vehicle carbon_z --first-seed 901 --json "
+            "docs/failure_kinds_carbon_z.json && python -m studies.failure_kinds --vehicle "
+            "aerosonde --first-seed 901 --json docs/failure_kinds_aerosonde.json",
+            failure_kinds,
+            "ALFA's failure kinds (surfaces stuck at 0, the engine cut) and the seven model "
+            "faults (steps and ramps) seeded into each vehicle's fault-free flights at onsets "
+            "of 60-120 s, the detector offline with the vehicle's shipped calibration and "
+            "defaults (the fast test beside the self-tuning one), on seeds from 901: not the "
+            "dev seeds (from 501) that chose the fast test's settings. "
+            "detectable_within_5_s: the flights whose fault, against its twin flown without "
+            "it, moves the generators' residuals within 5 s by the matched filter's "
+            "signal-to-noise ratio for 90 % detection at 5 % false alarms (2.93), white noise "
+            "assumed: the most any detector on these residuals could find; "
+            "detectable_found_within_5_s: of those, the ones the detector finds within 5 s; "
+            "median_bound_delay_s: when that ratio is reached; named_right: the found flights "
+            "whose first alarm names the failed part (aileron, elevator, rudder, engine; "
+            "docs/detector.md)."),
     Section("The Carbon-Z model on ALFA flights", "alfa_model_fit.json",
             "python -m studies.alfa_model_fit ALFA/ --vehicle carbon_z --json "
             "docs/alfa_model_fit.json", alfa_model_fit,

@@ -14,7 +14,8 @@ particular to that aircraft:
 - `airframes/<name>.yaml`: the servo mappings of its logs' outputs (uav_aircraft.airframe);
 - `residual_noise.yaml` and `detector_calibration.yaml`: the estimator's noise model and the
   detector's calibration, made by scripts/calibrate_estimator.py and calibrate_detector.py on
-  this aircraft's own fault-free flights.
+  this aircraft's own fault-free flights; `failure_signatures.yaml`: which failure a detector
+  alarm resembles, made by scripts/learn_signatures.py on its simulated failures.
 
 The surface deflection limits are read from the XML's FCS (one home). No module outside the
 folders names an aircraft: code takes a Vehicle, or a vehicle name to load_vehicle. No ROS here.
@@ -41,6 +42,8 @@ DETECTOR_CALIBRATION_FILE = "detector_calibration.yaml"
 # The paper's three generators' calibration: for flights and logs without the autopilot's
 # setpoints, which the shipped generators read.
 SURFACE_DETECTOR_CALIBRATION_FILE = "detector_calibration_surfaces.yaml"
+# Which failure a detector alarm resembles, learned on this aircraft's simulated failures.
+FAILURE_SIGNATURES_FILE = "failure_signatures.yaml"
 AIRFRAMES = "airframes"  # the folder of its airframe files
 CALIBRATION_PLAN = "calibration_plan"  # its folder of calibration flights
 MAX_VEHICLE_BYTES = 16 * 1024
@@ -161,6 +164,12 @@ class Vehicle:
         """The detector's calibration of the paper's three generators (roll, pitch, yaw: the
         surfaces and body rates alone) on the same flights."""
         return self.folder / SURFACE_DETECTOR_CALIBRATION_FILE
+
+    @property
+    def failure_signatures_file(self) -> Path:
+        """The failure signatures over the detector calibration's channels, learned on this
+        aircraft's simulated failures (scripts/learn_signatures.py)."""
+        return self.folder / FAILURE_SIGNATURES_FILE
 
 
 def vehicle_names() -> tuple[str, ...]:

@@ -30,7 +30,7 @@ DEFAULT_SETTLE_S = 30.0  # no test until the RLS has had this long after a start
 DEFAULT_FORGETTING_FACTOR = 0.995
 DEFAULT_WINDOW = 25  # M, the GLRT's window [samples]
 # W, the fast test's window [samples]: 3 s at 5 Hz. Chosen on the dev flights of
-# studies/alfa_kinds.py (seeds from 501; docs/detector.md): of 2, 3, 4 and 5 s, 3 s found
+# studies/failure_kinds.py (seeds from 501; docs/detector.md): of 2, 3, 4 and 5 s, 3 s found
 # the most single-aileron failures of the Carbon-Z within 5 s with no fault-free alarm.
 DEFAULT_FAST_WINDOW = 15
 # R, the fast test's reference before its window [samples]: 30 s at 5 Hz, long beside W
@@ -110,13 +110,19 @@ class Calibration:
 
 
 
+def parameter_deviations(theta: np.ndarray, channel: ChannelCalibration,
+                         airspeed_offset_mps: float | np.ndarray = 0.0) -> np.ndarray:
+    """(theta_i - mean_i(U)) / std_i for each of a channel's parameters; theta (n,) or
+    (K, n) for K samples, airspeed_offset_mps U - U_ref [m/s] (scalar or (K,); unused
+    without a schedule)."""
+    offset = np.asarray(airspeed_offset_mps, dtype=float)[..., None]
+    return (theta - channel.expected_parameters(offset)) / channel.parameter_std
+
+
 def parameter_deviation(theta: np.ndarray, channel: ChannelCalibration,
                         airspeed_offset_mps: float | np.ndarray = 0.0) -> np.ndarray:
     """The largest |theta_i - mean_i(U)| / std_i over a channel's parameters (section
-    III.C); theta (n,) or (K, n) for K samples, airspeed_offset_mps U - U_ref [m/s] (scalar
-    or (K,); unused without a schedule)."""
-    offset = np.asarray(airspeed_offset_mps, dtype=float)[..., None]
-    return np.max(np.abs(theta - channel.expected_parameters(offset)) / channel.parameter_std,
-                  axis=-1)
+    III.C); theta (n,) or (K, n), airspeed_offset_mps as parameter_deviations takes them."""
+    return np.max(np.abs(parameter_deviations(theta, channel, airspeed_offset_mps)), axis=-1)
 
 

@@ -132,7 +132,7 @@ def fast_calibration(runs: Sequence[Sequence[DetectorSample]], window: int, refe
         statistics = []
         for flight in residuals:
             test = SlidingMeanChange(window, reference, float(std))
-            statistics += [z for z in map(test.update, flight[:, k]) if z is not None]
+            statistics += [abs(z) for z in map(test.update, flight[:, k]) if z is not None]
         fitted.append(FastTestCalibration(float(std), weibull_fit(np.array(statistics))))
     return fitted
 

@@ -5,8 +5,8 @@
   with the median fixed at 0 (H0), b1 = mean |x - median(x)| with the median estimated (H1).
   With those estimates each likelihood is (2 b)^-M exp(-M), so the log ratio is eq. 22.
 - SlidingGlrt: T_L over the last M samples.
-- SlidingMeanChange: the fast test's statistic, the mean of the last W residuals against the
-  mean of the R before them, in units of its fault-free spread (the residuals those of the
+- SlidingMeanChange: the fast test's signed change, the mean of the last W residuals against
+  the mean of the R before them, in units of its fault-free spread (the residuals those of the
   generator with its parameters fixed): a window test for a change of the mean, which
   nothing adapts away and a constant offset does not move.
 - per_sample_probability: the per-sample exceedance probability that gives a stated rate of
@@ -52,11 +52,12 @@ class SlidingGlrt:
 
 
 class SlidingMeanChange:
-    """The fast test's statistic: the mean of the last `window` residuals against the mean
-    of the `reference` residuals before them, |m_W - m_R| / (std sqrt(1/W + 1/R)) (None
-    until both are full): about |N(0, 1)| for white residuals of spread std whatever their
+    """The fast test's signed change: the mean of the last `window` residuals against the
+    mean of the `reference` residuals before them, (m_W - m_R) / (std sqrt(1/W + 1/R)) (None
+    until both are full): about N(0, 1) for white residuals of spread std whatever their
     mean (a new day's bias, trim or sensor offset moves both means alike), and a step d of
-    the mean raises it by about |d| / std / sqrt(1/W + 1/R) within `window` samples."""
+    the mean moves it by about d / std / sqrt(1/W + 1/R) within `window` samples. Its size
+    is the test's statistic, its sign (over the channels) the change's signature."""
 
     def __init__(self, window: int, reference: int, std: float) -> None:
         if window < 1 or reference < 1 or not std > 0.0:
@@ -72,7 +73,7 @@ class SlidingMeanChange:
             return None
         values = np.fromiter(self.samples, float)
         reference, recent = values[:-self.window], values[-self.window:]
-        return abs(recent.mean() - reference.mean()) / self.scale
+        return float(recent.mean() - reference.mean()) / self.scale
 
 
 def per_sample_probability(false_alarms_per_hour: float, window: int,

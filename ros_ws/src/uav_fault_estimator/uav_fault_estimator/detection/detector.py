@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 from uav_common.sample_grid import on_grid
 
-from uav_fault_estimator.detection.calibration import Calibration, parameter_deviation
+from uav_fault_estimator.detection.calibration import Calibration, parameter_deviations
 from uav_fault_estimator.detection.change_detection import (
     SlidingGlrt,
     SlidingMeanChange,
@@ -50,6 +50,7 @@ from uav_fault_estimator.detection.generators import (
     regressions,
 )
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
+from uav_fault_estimator.detection.signatures import FailureSignatures, signature_features
 
 # The fast test's designed false alarms per flight hour, each channel. Chosen on ALFA's
 # flights leaving a day out (docs/detector.md): at 1 and 0.1 per hour a new day's
@@ -81,13 +82,17 @@ def detector_flight(flight: Sequence[np.ndarray]) -> DetectorFlight:
 
 @dataclass(frozen=True)
 class DetectorSample:
-    """One detector step: per channel (the calibration's order) residual, GLRT statistic (NaN while
-    the window fills or the RLS settles), threshold, alarm and parameter deviation; the
-    parameter threshold and alarm; per channel the fast test's residual (parameters fixed),
-    statistic (NaN while its window fills or the RLS settles), threshold and alarm; the
-    combined alarm (either test); each channel's parameters; and the failure kind the
-    combined alarm names (generators.FAILURE_GENERATORS: that of the channel whose alarming
-    test lies furthest over its threshold; empty without one)."""
+    """One detector step: per channel (the calibration's order) residual, GLRT statistic
+    (NaN while the window fills or the RLS settles), threshold, alarm and parameter
+    deviation (the largest of its parameters'); each parameter's signed deviation, channel
+    after channel (NaN while the RLS settles); the parameter threshold and alarm; per
+    channel the fast test's residual (parameters fixed), signed change (NaN while its
+    window fills or the RLS settles; its size the statistic), threshold and alarm; the
+    combined alarm (either test); each channel's parameters; and the cause the combined
+    alarm names (empty without one): the failure its signature (fast-test changes and
+    parameter deviations) resembles most (signatures.FailureSignatures) where the detector
+    has signatures, else the kind of the channel whose alarming test lies furthest over its
+    threshold (generators.FAILURE_GENERATORS)."""
 
     time_s: float
     residual: np.ndarray
@@ -95,16 +100,22 @@ class DetectorSample:
     threshold: np.ndarray
     alarm: np.ndarray
     parameter_deviation: np.ndarray
+    parameter_deviations: np.ndarray
     parameter_threshold: float
     parameter_alarm: bool
     fixed_residual: np.ndarray
-    fast_statistic: np.ndarray
+    fast_change: np.ndarray
     fast_threshold: np.ndarray
     fast_alarm: np.ndarray
     combined_alarm: bool
     theta: dict[str, np.ndarray]
     airspeed_mps: float  # the filtered airspeed the schedule used (NaN: none known)
     cause: str = ""
+
+    @property
+    def fast_statistic(self) -> np.ndarray:
+        """Each channel's fast-test statistic: the size of its change (NaN where none)."""
+        return np.abs(self.fast_change)
 
     @property
     def self_tuning_alarm(self) -> bool:
@@ -172,12 +183,18 @@ def flight_samples(flight: Sequence[np.ndarray]) -> Iterator[tuple]:
 
 class SelfTuningDetector:
     """Feed it every sample; it acts on the calibration's sample grid, with the generators
-    the calibration names."""
+    the calibration names; its alarms name their cause by the signatures (over the
+    calibration's channels; None: by the strongest channel)."""
 
     def __init__(self, calibration: Calibration, false_alarm_probability: float,
-                 fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR
-                 ) -> None:
+                 fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR,
+                 signatures: FailureSignatures | None = None) -> None:
+        if signatures is not None and signatures.features != signature_features(calibration):
+            raise ValueError(f"signatures over {', '.join(signatures.features)}: the "
+                             "calibration's are over "
+                             f"{', '.join(signature_features(calibration))}")
         self.calibration = calibration
+        self.signatures = signatures
         self.set_false_alarm_probability(false_alarm_probability)
         self.set_fast_false_alarm_rate(fast_false_alarms_per_hour)
         self.feed = RegressionFeed(calibration.channel_names, calibration.sample_period_s)
@@ -246,7 +263,7 @@ class SelfTuningDetector:
             return None
         airspeed_offset_mps = self.airspeed_offset_mps(airspeed_mps)
         settled = time_s - self.feed.started_s >= self.calibration.settle_s
-        residual, statistic, deviation, theta = [], [], [], {}
+        residual, statistic, deviations, theta = [], [], [], {}
         fixed, fast = [], []
         for name, channel in self.calibration.channels.items():
             phi, y = regression[name]
@@ -257,26 +274,39 @@ class SelfTuningDetector:
             g = self.glrt[name].update(step.prediction_error)
             residual.append(step.prediction_error)
             statistic.append(g if g is not None and settled else math.nan)
-            deviation.append(float(parameter_deviation(step.theta, channel, airspeed_offset_mps))
-                             if settled else math.nan)  # NaN offset: NaN, no alarm
+            # NaN offset: NaN, no alarm
+            deviations.append(parameter_deviations(step.theta, channel, airspeed_offset_mps)
+                              if settled else np.full(len(step.theta), math.nan))
             theta[name] = step.theta
-        statistic, deviation, fast = np.array(statistic), np.array(deviation), np.array(fast)
+        deviation = np.array([np.max(np.abs(d)) for d in deviations])
+        statistic, fast = np.array(statistic), np.array(fast)
+        signed_deviations = np.concatenate(deviations)
         alarm = statistic > self.thresholds  # NaN compares False
         deviates = deviation > self.parameter_threshold
-        fast_alarm = fast > self.fast_thresholds
-        names = self.calibration.channel_names
+        fast_alarm = np.abs(fast) > self.fast_thresholds
+        combined = bool(np.any(alarm & deviates) or fast_alarm.any())
         return DetectorSample(
             time_s=time_s, residual=np.array(residual), statistic=statistic,
             threshold=self.thresholds.copy(), alarm=alarm, parameter_deviation=deviation,
-            parameter_threshold=self.parameter_threshold,
+            parameter_deviations=signed_deviations, parameter_threshold=self.parameter_threshold,
             parameter_alarm=bool(deviates.any()), fixed_residual=np.array(fixed),
-            fast_statistic=fast, fast_threshold=self.fast_thresholds.copy(),
+            fast_change=fast, fast_threshold=self.fast_thresholds.copy(),
             fast_alarm=fast_alarm,
-            combined_alarm=bool(np.any(alarm & deviates) or fast_alarm.any()), theta=theta,
-            airspeed_mps=self.filtered_airspeed_mps,
-            cause=alarm_cause(names, np.where(alarm & deviates, statistic / self.thresholds, 0.0),
-                              np.where(fast_alarm, fast / self.fast_thresholds, 0.0)),
+            combined_alarm=combined, theta=theta, airspeed_mps=self.filtered_airspeed_mps,
+            cause=self.cause(np.concatenate([fast, signed_deviations]),
+                             np.where(alarm & deviates, statistic / self.thresholds, 0.0),
+                             np.where(fast_alarm, np.abs(fast) / self.fast_thresholds, 0.0))
+            if combined else "",
         )
+
+    def cause(self, signature: np.ndarray, self_tuning_ratio: np.ndarray,
+              fast_ratio: np.ndarray) -> str:
+        """An alarm's cause: the signatures' for its signature (the fast-test changes, then
+        the parameters' deviations: signatures.signature_features), else (no signatures, the
+        signature not yet known) alarm_cause's."""
+        named = "" if self.signatures is None else self.signatures.cause(signature)
+        return named or alarm_cause(self.calibration.channel_names, self_tuning_ratio,
+                                    fast_ratio)
 
     def airspeed_offset_mps(self, airspeed_mps: float) -> float:
         """U - U_ref of the schedule from this sample's airspeed [m/s] (filter_airspeed);
@@ -299,12 +329,12 @@ def alarm_cause(channel_names: Sequence[str], self_tuning_ratio: np.ndarray,
 
 def run_detector(calibration: Calibration, flight: Sequence[np.ndarray],
                  false_alarm_probability: float,
-                 fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR
-                 ) -> list[DetectorSample]:
+                 fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR,
+                 signatures: FailureSignatures | None = None) -> list[DetectorSample]:
     """The detector over one flight (DetectorFlight, or (times, states, controls) without
-    airspeed) from its calibration: every sample it makes."""
+    airspeed) from its calibration (and signatures): every sample it makes."""
     detector = SelfTuningDetector(calibration, false_alarm_probability,
-                                  fast_false_alarms_per_hour)
+                                  fast_false_alarms_per_hour, signatures)
     samples = []
     for sample in flight_samples(flight):
         result = detector.update(*sample)
