@@ -127,10 +127,15 @@ def samples_alarmed_at(times_s: np.ndarray, alarmed: dict[float, int]) -> list[D
     for time_s in times_s:
         channel = alarmed.get(round(float(time_s), 1))
         alarm = np.array([channel == 0, channel == 1])
+        deviation = np.where(alarm, 9.0, 0.5)
         samples.append(DetectorSample(
-            float(time_s), np.zeros(2), np.where(alarm, 5.0, 1.0), np.full(2, 2.0), alarm,
-            np.where(alarm, 9.0, 0.5), 3.0, bool(alarm.any()), np.zeros(2), np.ones(2),
-            np.full(2, 2.0), np.zeros(2, dtype=bool), bool(alarm.any()), {}, math.nan))
+            time_s=float(time_s), residual=np.zeros(2), statistic=np.where(alarm, 5.0, 1.0),
+            threshold=np.full(2, 2.0), alarm=alarm, parameter_deviation=deviation,
+            parameter_deviations=deviation, parameter_threshold=3.0,
+            parameter_alarm=bool(alarm.any()), fixed_residual=np.zeros(2),
+            fast_change=np.ones(2), fast_threshold=np.full(2, 2.0),
+            fast_alarm=np.zeros(2, dtype=bool), combined_alarm=bool(alarm.any()), theta={},
+            airspeed_mps=math.nan))
     return samples
 
 

@@ -33,10 +33,13 @@ def sample(time_s: float, statistic: tuple[float, float, float],
     statistic, deviation = np.array(statistic), np.array(deviation)
     alarm, deviates = statistic > THRESHOLD, deviation > THRESHOLD
     quiet = np.ones(3)  # the fast test's statistic, below THRESHOLD: the self-tuning tests'
-    return DetectorSample(time_s, np.zeros(3), statistic, np.full(3, THRESHOLD), alarm,
-                          deviation, THRESHOLD, bool(deviates.any()), np.zeros(3), quiet,
-                          np.full(3, THRESHOLD), quiet > THRESHOLD,
-                          bool(np.any(alarm & deviates)), {}, 25.0)
+    return DetectorSample(
+        time_s=time_s, residual=np.zeros(3), statistic=statistic,
+        threshold=np.full(3, THRESHOLD), alarm=alarm, parameter_deviation=deviation,
+        parameter_deviations=np.repeat(deviation, 2), parameter_threshold=THRESHOLD,
+        parameter_alarm=bool(deviates.any()), fixed_residual=np.zeros(3), fast_change=quiet,
+        fast_threshold=np.full(3, THRESHOLD), fast_alarm=quiet > THRESHOLD,
+        combined_alarm=bool(np.any(alarm & deviates)), theta={}, airspeed_mps=25.0)
 
 
 QUIET, HIGH, NAN = (1.0, 1.0, 1.0), (20.0, 1.0, 1.0), (math.nan,) * 3
