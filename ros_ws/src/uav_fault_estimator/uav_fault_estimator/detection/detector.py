@@ -183,8 +183,8 @@ def flight_samples(flight: Sequence[np.ndarray]) -> Iterator[tuple]:
 
 class SelfTuningDetector:
     """Feed it every sample; it acts on the calibration's sample grid, with the generators
-    the calibration names; its alarms name their cause by the signatures (over the
-    calibration's channels; None: by the strongest channel)."""
+    the calibration names; its alarms name their cause by the signatures (learned with the
+    calibration: signatures.signature_features; None: by the strongest channel)."""
 
     def __init__(self, calibration: Calibration, false_alarm_probability: float,
                  fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR,
