@@ -35,7 +35,11 @@ from uav_fault_estimator.campaigns.campaign import (
 from uav_fault_estimator.chain.failure_flights import FAULT_FREE, failure_flights
 from uav_fault_estimator.chain.offline import fly_on_grid_each
 from uav_fault_estimator.detection.calibration import DEFAULT_SAMPLE_PERIOD_S, Calibration
-from uav_fault_estimator.detection.detector import DetectorSample, run_detector
+from uav_fault_estimator.detection.detector import (
+    DetectorSample,
+    first_combined_alarm,
+    run_detector,
+)
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
     detector_calibration,
@@ -54,14 +58,12 @@ FIRST_SEED = 501
 
 def first_alarm_signature(samples: list[DetectorSample], onset_s: float
                           ) -> np.ndarray | None:
-    """The signature (signatures.signature_features: the fast-test changes, then the
-    parameters' deviations) at the first combined alarm at or after onset_s [s] (None: no
-    alarm, or its signature not yet known)."""
-    first = next((s for s in samples if s.time_s >= onset_s and s.combined_alarm), None)
-    if first is None:
+    """The signature at the first combined alarm at or after onset_s [s] (None: no alarm,
+    or its signature not yet known)."""
+    first = first_combined_alarm(samples, onset_s)
+    if first is None or not np.all(np.isfinite(first.signature)):
         return None
-    signature = np.concatenate([first.fast_change, first.parameter_deviations])
-    return signature if np.all(np.isfinite(signature)) else None
+    return first.signature
 
 
 def examples(vehicle: str, count: int, first_seed: int, calibration: Calibration,

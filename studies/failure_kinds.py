@@ -60,7 +60,11 @@ from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
     Calibration,
 )
-from uav_fault_estimator.detection.detector import RegressionFeed, flight_samples, run_detector
+from uav_fault_estimator.detection.detector import (
+    DetectorSample,
+    first_combined_alarm,
+    run_detector,
+)
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
     detector_calibration,
@@ -74,22 +78,15 @@ WITHIN_S = 5.0  # ALFA's evaluator: a detection later than this is a miss
 REQUIRED_SNR = NormalDist().inv_cdf(0.95) + NormalDist().inv_cdf(0.90)
 
 
-def generator_residuals(flight: GridFlight, calibration: Calibration
-                        ) -> tuple[np.ndarray, np.ndarray]:
-    """times (K,) [s] of the samples every generator of the calibration can use, and
-    their residuals y - phiᵀ theta0 (K, G), generators in the calibration's order."""
-    feed = RegressionFeed(calibration.channel_names, calibration.sample_period_s)
-    times_s, rows = [], []
-    for time_s, state, controls, _, setpoints in flight_samples(flight.detector_flight):
-        regression = feed.step(time_s, state, controls, setpoints)
-        if regression is not None:
-            times_s.append(time_s)
-            rows.append([y - phi @ calibration.channels[name].theta0
-                         for name, (phi, y) in regression.items()])
-    return np.array(times_s), np.array(rows)
+def fixed_residuals(samples: list[DetectorSample]) -> tuple[np.ndarray, np.ndarray]:
+    """times (K,) [s] of a detector run's samples (those every generator of its calibration
+    could use), and their residuals with the calibration's parameters fixed, y - phiᵀ theta0
+    (K, G), generators in the calibration's order."""
+    return (np.array([sample.time_s for sample in samples]),
+            np.array([sample.fixed_residual for sample in samples]))
 
 
-Residuals = tuple[np.ndarray, np.ndarray]  # generator_residuals' times [s] and residuals
+Residuals = tuple[np.ndarray, np.ndarray]  # fixed_residuals' times [s] and residuals
 
 
 def cumulative_signal_to_noise(failed: Residuals, twin: Residuals, settle_s: float,
@@ -134,42 +131,39 @@ class FlightResult(NamedTuple):
     bound_delay_s: float | None
 
 
-def detector_result(flight: FailureFlight, grid: GridFlight, calibration: Calibration,
-                    false_alarm_probability: float, signatures: FailureSignatures | None
+def detector_result(flight: FailureFlight, samples: list[DetectorSample]
                     ) -> tuple[float | None, bool, bool]:
-    """The first combined alarm's delay after the reference [s] (None: none after the
-    onset), whether one came before the onset (any alarm on a fault-free flight), and
-    whether the first alarm after the onset names the failed part."""
-    alarms = [(sample.time_s, sample.cause) for sample in run_detector(
-        calibration, grid.detector_flight, false_alarm_probability, signatures=signatures)
-        if sample.combined_alarm]
+    """From the detector's samples over the flight: the first combined alarm's delay after
+    the reference [s] (None: none after the onset), whether one came before the onset (any
+    alarm on a fault-free flight), and whether the first alarm after the onset names the
+    failed part."""
     if flight.kind == FAULT_FREE:
-        return None, bool(alarms), False
-    after = [(t, cause) for t, cause in alarms if t >= flight.onset_s]
-    early = any(t < flight.onset_s for t, _ in alarms)
-    if not after:
+        return None, first_combined_alarm(samples) is not None, False
+    early = any(s.combined_alarm for s in samples if s.time_s < flight.onset_s)
+    first = first_combined_alarm(samples, flight.onset_s)
+    if first is None:
         return None, early, False
     (fault,) = flight.scenario.faults
-    return (float(after[0][0] - flight.reference_s), early,
-            after[0][1] == CAUSE_OF_FAULT[fault.name])
+    return (float(first.time_s - flight.reference_s), early,
+            first.cause == CAUSE_OF_FAULT[fault.name])
 
 
 def judge(table: list[FailureFlight], grid: list[GridFlight], calibration: Calibration,
           false_alarm_probability: float, signatures: FailureSignatures | None
           ) -> list[FlightResult]:
-    """Each flight's FlightResult; the twins' residuals made once."""
-    twins = {flight.twin: generator_residuals(flown, calibration)
-             for flight, flown in zip(table, grid, strict=True) if flight.kind == FAULT_FREE}
+    """Each flight's FlightResult, from one detector run over each flight."""
+    runs = [run_detector(calibration, flown.detector_flight, false_alarm_probability,
+                         signatures=signatures) for flown in grid]
+    twins = {flight.twin: fixed_residuals(samples)
+             for flight, samples in zip(table, runs, strict=True) if flight.kind == FAULT_FREE}
     results = []
-    for flight, flown in zip(table, grid, strict=True):
-        detector = detector_result(flight, flown, calibration, false_alarm_probability,
-                                   signatures)
+    for flight, samples in zip(table, runs, strict=True):
+        detector = detector_result(flight, samples)
         if flight.kind == FAULT_FREE:
             results.append(FlightResult(flight.kind, *detector, np.nan, None))
             continue
-        ratio, bound_delay_s = bound(generator_residuals(flown, calibration),
-                                     twins[flight.twin], calibration.settle_s,
-                                     flight.reference_s)
+        ratio, bound_delay_s = bound(fixed_residuals(samples), twins[flight.twin],
+                                     calibration.settle_s, flight.reference_s)
         results.append(FlightResult(flight.kind, *detector, ratio, bound_delay_s))
     return results
 

@@ -16,8 +16,9 @@ from uav_fault_estimator.detection.calibration import (
     FastTestCalibration,
 )
 from uav_fault_estimator.detection.change_detection import Weibull
+from uav_fault_estimator.detection.detector import run_detector
 
-from studies.failure_kinds import REQUIRED_SNR, bound, generator_residuals
+from studies.failure_kinds import REQUIRED_SNR, bound, fixed_residuals
 
 PERIOD_S = 0.2
 NORTH = 6  # velocity north in the state (uav_common.channels)
@@ -77,8 +78,9 @@ def test_the_bound_is_the_matched_filters_signal_to_noise_ratio_and_its_delay():
     times_s = np.arange(600) * PERIOD_S
     loss_mps2 = np.where(times_s > 60.1, 0.5, 0.0)
     calibration = longitudinal_calibration()
-    clean = generator_residuals(level_flight_north(noise_mps2), calibration)
-    failed = generator_residuals(level_flight_north(noise_mps2 - loss_mps2), calibration)
+    clean, failed = (fixed_residuals(run_detector(calibration, level_flight_north(forces)
+                                                  .detector_flight, 0.01))
+                     for forces in (noise_mps2, noise_mps2 - loss_mps2))
     spread = np.std(noise_mps2[1:][times_s[1:] >= 30.0])  # the twin's residual, settled
     ratio, delay_s = bound(failed, clean, 30.0, 60.1)
     assert ratio == pytest.approx(5.0 * 0.5 / spread, rel=1e-9)

@@ -1,8 +1,8 @@
 """The detector's calibration from fault-free flights (Blanke & Hansen, section III): the
 RLS's initial parameters by least squares, then, from the detector run over each flight,
 the parameters' spread (optionally scheduled on airspeed) and the Weibull fits of both
-statistics; and the fast test's: the mean and spread of each generator's residual with
-theta0 fixed, and the Weibull fit of its window statistic. No ROS here."""
+statistics; and the fast test's: the spread of each generator's residual with theta0
+fixed, and the Weibull fit of its window statistic. No ROS here."""
 
 from __future__ import annotations
 
@@ -77,10 +77,9 @@ def calibrate(flights: Sequence[Sequence[np.ndarray]],
     flights on the sample grid (DetectorFlight, or (times, states, controls) without
     airspeed), made with (and carrying) the sample period [s], forgetting factor, GLRT
     window [samples], settling time [s] and fast-test window and reference [samples]: the
-    initial
-    parameters, then, from the RLS and GLRT run over each flight from them, the parameters'
-    spread, the Weibull fits of both statistics and the fast test's (fast_calibration).
-    scheduled: the parameters' means affine in the filtered airspeed
+    initial parameters, then, from the RLS and GLRT run over each flight from them, the
+    parameters' spread, the Weibull fits of both statistics and the fast test's
+    (fast_calibration). scheduled: the parameters' means affine in the filtered airspeed
     (airspeed_schedule); ScheduleError when the flights' airspeeds span less than
     MIN_SCHEDULE_SPAN_MPS, ValueError when a generator has too few samples."""
     generators = checked_generators(tuple(generators))

@@ -50,7 +50,11 @@ from uav_fault_estimator.detection.generators import (
     regressions,
 )
 from uav_fault_estimator.detection.rls import RecursiveLeastSquares
-from uav_fault_estimator.detection.signatures import FailureSignatures, signature_features
+from uav_fault_estimator.detection.signatures import (
+    FailureSignatures,
+    signature_features,
+    signature_of,
+)
 
 # The fast test's designed false alarms per flight hour, each channel. Chosen on ALFA's
 # flights leaving a day out (docs/detector.md): at 1 and 0.1 per hour a new day's
@@ -121,6 +125,31 @@ class DetectorSample:
     def self_tuning_alarm(self) -> bool:
         """The paper's combined alarm: some channel's GLRT and parameter tests agree."""
         return bool(np.any(self.alarm & (self.parameter_deviation > self.parameter_threshold)))
+
+    @property
+    def channel_combined_alarm(self) -> np.ndarray:
+        """Per channel, the combined alarm's rule (channel_combined_alarm below)."""
+        return channel_combined_alarm(self.alarm, self.parameter_deviation
+                                      > self.parameter_threshold, self.fast_alarm)
+
+    @property
+    def signature(self) -> np.ndarray:
+        """The sample's failure signature (signatures.signature_of)."""
+        return signature_of(self.fast_change, self.parameter_deviations)
+
+
+def channel_combined_alarm(alarm: np.ndarray, deviates: np.ndarray, fast_alarm: np.ndarray
+                           ) -> np.ndarray:
+    """Per channel, the combined alarm: its GLRT and parameter tests agree (section III.D),
+    or its fast test alarms; the detector's combined alarm is raised when some channel's is."""
+    return (alarm & deviates) | fast_alarm
+
+
+def first_combined_alarm(samples: Sequence[DetectorSample], after_s: float = -math.inf
+                         ) -> DetectorSample | None:
+    """The first sample at or after after_s [s] with a combined alarm; None without one."""
+    return next((sample for sample in samples
+                 if sample.combined_alarm and sample.time_s >= after_s), None)
 
 
 class RegressionFeed:
@@ -284,7 +313,7 @@ class SelfTuningDetector:
         alarm = statistic > self.thresholds  # NaN compares False
         deviates = deviation > self.parameter_threshold
         fast_alarm = np.abs(fast) > self.fast_thresholds
-        combined = bool(np.any(alarm & deviates) or fast_alarm.any())
+        combined = bool(channel_combined_alarm(alarm, deviates, fast_alarm).any())
         return DetectorSample(
             time_s=time_s, residual=np.array(residual), statistic=statistic,
             threshold=self.thresholds.copy(), alarm=alarm, parameter_deviation=deviation,
@@ -293,7 +322,7 @@ class SelfTuningDetector:
             fast_change=fast, fast_threshold=self.fast_thresholds.copy(),
             fast_alarm=fast_alarm,
             combined_alarm=combined, theta=theta, airspeed_mps=self.filtered_airspeed_mps,
-            cause=self.cause(np.concatenate([fast, signed_deviations]),
+            cause=self.cause(signature_of(fast, signed_deviations),
                              np.where(alarm & deviates, statistic / self.thresholds, 0.0),
                              np.where(fast_alarm, np.abs(fast) / self.fast_thresholds, 0.0))
             if combined else "",
@@ -301,9 +330,8 @@ class SelfTuningDetector:
 
     def cause(self, signature: np.ndarray, self_tuning_ratio: np.ndarray,
               fast_ratio: np.ndarray) -> str:
-        """An alarm's cause: the signatures' for its signature (the fast-test changes, then
-        the parameters' deviations: signatures.signature_features), else (no signatures, the
-        signature not yet known) alarm_cause's."""
+        """An alarm's cause: the signatures' for its signature (signatures.signature_of), else
+        (no signatures, the signature not yet known) alarm_cause's."""
         named = "" if self.signatures is None else self.signatures.cause(signature)
         return named or alarm_cause(self.calibration.channel_names, self_tuning_ratio,
                                     fast_ratio)

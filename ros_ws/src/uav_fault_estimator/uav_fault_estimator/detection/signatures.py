@@ -73,6 +73,12 @@ class FailureSignatures:
         return next(cause for cause in nearest if votes[cause] == most)
 
 
+def signature_of(fast_change: np.ndarray, parameter_deviations: np.ndarray) -> np.ndarray:
+    """An alarm's signature (F,): each channel's fast-test change, then each channel's
+    parameters' signed deviations, the order signature_features names."""
+    return np.concatenate([fast_change, parameter_deviations])
+
+
 def signature_features(calibration: Calibration) -> tuple[str, ...]:
     """The names of a signature's entries for the calibration: each channel's fast-test
     change (the channel's name), then each channel's parameters' deviations

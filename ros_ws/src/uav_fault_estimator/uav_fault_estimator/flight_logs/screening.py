@@ -28,7 +28,7 @@ import numpy as np
 from uav_common.channels import CONTROL_CHANNELS, STATE_CHANNELS
 from uav_common.sample_grid import GRID_TOLERANCE_S
 
-from uav_fault_estimator.detection.detector import DetectorSample
+from uav_fault_estimator.detection.detector import DetectorSample, first_combined_alarm
 from uav_fault_estimator.flight_logs.resample import DetectorInputs
 from uav_fault_estimator.reporting.figures import save_figure, shade_alarms
 
@@ -58,8 +58,9 @@ def channel_alarms(samples: Sequence[DetectorSample], channels: int) -> dict[str
     parameter = np.array([sample.parameter_deviation > sample.parameter_threshold
                           for sample in samples], dtype=bool).reshape(-1, channels)
     fast = np.array([sample.fast_alarm for sample in samples], dtype=bool).reshape(-1, channels)
-    return {"glrt": glrt, "parameter": parameter, "fast": fast,
-            COMBINED: (glrt & parameter) | fast}
+    combined = np.array([sample.channel_combined_alarm for sample in samples],
+                        dtype=bool).reshape(-1, channels)
+    return {"glrt": glrt, "parameter": parameter, "fast": fast, COMBINED: combined}
 
 
 def raised_runs(times_s: np.ndarray, raised: np.ndarray,
@@ -95,8 +96,8 @@ def alarm_intervals(samples: Sequence[DetectorSample], channels: Sequence[str],
 def first_combined_alarm_s(samples: Sequence[DetectorSample],
                            after_s: float = -math.inf) -> float | None:
     """The time [s] of the first combined alarm at or after after_s [s]; None without one."""
-    return next((round(sample.time_s, TIME_DECIMALS) for sample in samples
-                 if sample.combined_alarm and sample.time_s >= after_s), None)
+    first = first_combined_alarm(samples, after_s)
+    return None if first is None else round(first.time_s, TIME_DECIMALS)
 
 
 def log_summary(name: str, source: str, samples: Sequence[DetectorSample],
