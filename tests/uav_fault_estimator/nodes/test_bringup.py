@@ -85,11 +85,13 @@ def test_two_aircraft_fly_on_one_clock_and_the_run_ends_when_both_have(
     output = bringup.output()
     print(output)
     assert "every sim_node finished its scenario" in output
-    # mhe_node may still miss a residual or two to discovery, never the end
-    ends = [stamp_seconds(received[-1].header.stamp) for received in estimates.values()]
-    counts = [len(received) for received in estimates.values()]
-    print("estimates received:", counts, "last stamps:", ends)
-    assert ends == [10.0, 10.0] and min(counts) >= 15
+    # the first estimates may go to discovery at ten times real time (on a busy machine
+    # up to 7 of 20 did), never the second half of the flight nor the end: every estimate
+    # from 5 s to 10 s, each half second
+    stamps = [[stamp_seconds(m.header.stamp) for m in received] for received in estimates.values()]
+    print("estimates received:", [len(s) for s in stamps], "stamps:", stamps)
+    second_half = [5.0 + 0.5 * k for k in range(11)]
+    assert all(set(second_half) <= set(mine) and mine[-1] == 10.0 for mine in stamps)
     # both aircraft in the one map, each its own base_link
     assert graph.wait("/tf of both aircraft", lambda: len(
         {t.child_frame_id for m in transforms for t in m.transforms}) == 2, timeout_s=10)
