@@ -18,7 +18,13 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.change_detection import Weibull
 from uav_fault_estimator.detection.detector import run_detector
 
-from studies.failure_kinds import REQUIRED_SNR, bound, fixed_residuals
+from studies.failure_kinds import (
+    REQUIRED_SNR,
+    bound,
+    fixed_residuals,
+    found_by_sliding_bound,
+    matched_filter,
+)
 
 PERIOD_S = 0.2
 NORTH = 6  # velocity north in the state (uav_common.channels)
@@ -89,3 +95,45 @@ def test_the_bound_is_the_matched_filters_signal_to_noise_ratio_and_its_delay():
     assert ratio > REQUIRED_SNR  # 0.5 m/s^2 is 5 spreads: found by the bound
     assert bound(clean, clean, 30.0, 60.1) == (0.0, None)
     assert pytest.approx(1.6449 + 1.2816, abs=1e-4) == REQUIRED_SNR
+
+
+@pytest.mark.timeout(30)
+def test_the_matched_filter_slides_as_a_unit_normal_on_white_residuals():
+    """On white residuals of spread 0.3 and a signature whose samples sum to zero per
+    generator (so the reference mean takes nothing away), the slid statistic is N(0, 1);
+    a copy of the signature added at one place raises it there by the signature's norm."""
+    rng = np.random.default_rng(5)
+    residuals = rng.normal(0.0, 0.3, (20_000, 2))
+    signature = np.tile([[0.2, -0.1], [-0.2, 0.1]], (10, 1))  # (20, 2), zero sum
+    spread = np.array([0.3, 0.3])
+    statistic = matched_filter(signature, spread, residuals, 150)
+    assert np.isnan(statistic[:168]).all() and np.isfinite(statistic[169:]).all()
+    assert abs(np.mean(statistic[169:])) < 0.05 and np.std(statistic[169:]) == pytest.approx(
+        1.0, abs=0.03)
+    with_signal = residuals.copy()
+    with_signal[1000:1020] += signature
+    raised = matched_filter(signature, spread, with_signal, 150)[1019] - statistic[1019]
+    assert raised == pytest.approx(math.sqrt(np.sum((signature / spread) ** 2)), rel=1e-9)
+
+
+@pytest.mark.timeout(30)
+def test_the_sliding_bound_finds_a_loss_above_every_fault_free_flights_largest_value():
+    """A thrust loss from 60.1 s in white residuals of spread 0.1, ten fault-free flights:
+    0.5 and 0.1 m/s^2 (25 and 5 spreads over 5 s) rise above the largest value the filter
+    reaches on any of them, 0.06 m/s^2 (3 spreads: detectable by the twin bound, which
+    allows a 5 % false-alarm rate) does not."""
+    rng = np.random.default_rng(5)
+    noises = [rng.normal(0.0, 0.1, 600) for _ in range(10)]
+    times_s = np.arange(600) * PERIOD_S
+    calibration = longitudinal_calibration()
+
+    def residuals(forces):
+        return fixed_residuals(run_detector(calibration, level_flight_north(forces)
+                                            .detector_flight, 0.01))
+
+    fault_free = [residuals(noise) for noise in noises]
+    for loss_mps2, found in ((0.5, True), (0.1, True), (0.06, False)):
+        failed = residuals(noises[0] - np.where(times_s > 60.1, loss_mps2, 0.0))
+        assert bound(failed, fault_free[0], 30.0, 60.1)[0] >= REQUIRED_SNR
+        assert found_by_sliding_bound(failed, fault_free[0], fault_free, 30.0, 60.1, 150) \
+            is found, loss_mps2
