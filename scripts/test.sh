@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Sets the workspace up if needed, then runs the linter and every test (unit and
-# integration): what CI runs, the test files spread over one pytest process per core (a
-# file's tests stay together: they share its ROS domain and fixtures). Extra arguments go to
-# pytest, e.g. `./scripts/test.sh -k echo`, `./scripts/test.sh -n 0` (in this process).
+# integration): what CI runs, the test files spread over one pytest process more than the
+# cores (a file's tests stay together: they share its ROS domain and fixtures; the node
+# tests spend part of their time waiting on other processes: one per core leaves the cores
+# idle part of the run). Extra arguments go to pytest, e.g. `./scripts/test.sh -k echo`,
+# `./scripts/test.sh -n 0` (in this process).
 #   ./scripts/test.sh --quick [ARGS...]   the tests marked neither slow nor integration
 #   ./scripts/test.sh --repeat N [--under-load] [ARGS...]
 #       the selection N times in a row (under load: a busy process on every core), then per
@@ -30,7 +32,7 @@ fi
 # shellcheck disable=SC1091
 source scripts/env.sh
 ruff check .
-spread=(--numprocesses auto --dist loadfile)
+spread=(--numprocesses "$(($(nproc) + 1))" --dist loadfile)
 if [ ${#repeat[@]} -gt 0 ]; then
     exec python scripts/repeat_tests.py "${repeat[@]}" "${spread[@]}" "${selection[@]}" "$@"
 fi
