@@ -20,10 +20,13 @@ from uav_fault_estimator.detection.detector import run_detector
 
 from studies.failure_kinds import (
     REQUIRED_SNR,
+    WHITENING_ORDER,
     bound,
     fixed_residuals,
     found_by_sliding_bound,
     matched_filter,
+    whitened,
+    whitening_filters,
 )
 
 PERIOD_S = 0.2
@@ -137,3 +140,25 @@ def test_the_sliding_bound_finds_a_loss_above_every_fault_free_flights_largest_v
         assert bound(failed, fault_free[0], 30.0, 60.1)[0] >= REQUIRED_SNR
         assert found_by_sliding_bound(failed, fault_free[0], fault_free, 30.0, 60.1, 150) \
             is found, loss_mps2
+
+
+@pytest.mark.timeout(30)
+def test_the_whitening_filter_of_an_autoregressive_residual_leaves_its_innovations():
+    """Residuals r[k] = 0.8 r[k-1] + e[k] (e of spread 0.1) on three flights, 30 s settling
+    left out: the fitted filter is [1, -0.8, 0, 0, 0] to within sampling, and the whitened
+    residuals are e again after the filter's first samples."""
+    rng = np.random.default_rng(11)
+    times_s = np.arange(3000) * PERIOD_S
+    flights, innovations = [], []
+    for _ in range(3):
+        e = rng.normal(0.0, 0.1, (3000, 1))
+        r = np.zeros_like(e)
+        for k in range(1, 3000):
+            r[k] = 0.8 * r[k - 1] + e[k]
+        flights.append((times_s, r))
+        innovations.append(e)
+    filters = whitening_filters(flights, 30.0)
+    assert filters.shape == (1, WHITENING_ORDER + 1)
+    assert filters[0] == pytest.approx([1.0, -0.8, 0.0, 0.0, 0.0], abs=0.03)
+    _, white = whitened(flights[0], filters)
+    assert np.std(white[10:] - innovations[0][10:]) < 0.01
