@@ -198,18 +198,6 @@ def whitened(flight: Residuals, filters: np.ndarray) -> Residuals:
                                      for g, taps in enumerate(filters)])
 
 
-def found_by_sliding_bounds(failed: Residuals, twin: Residuals, fault_free: list[Residuals],
-                            filters: np.ndarray, settle_s: float, reference_s: float,
-                            reference: int) -> bool:
-    """Whether the sliding bound finds the flight on the residuals as they are, or on them
-    whitened by the filters (whitening_filters): each filter at its own threshold, which
-    no fault-free flight reaches, so that together they keep those flights quiet too."""
-    return any(found_by_sliding_bound(*flights, settle_s, reference_s, reference)
-               for flights in ((failed, twin, fault_free),
-                               (whitened(failed, filters), whitened(twin, filters),
-                                [whitened(flight, filters) for flight in fault_free])))
-
-
 class FlightResult(NamedTuple):
     """What one flight showed: its kind, the first combined alarm's delay after the
     reference [s] (None: none), an alarm before the onset (on a fault-free flight: any),
@@ -252,8 +240,13 @@ def judge(table: list[FailureFlight], grid: list[GridFlight], calibration: Calib
                          signatures=signatures) for flown in grid]
     twins = {flight.twin: fixed_residuals(samples)
              for flight, samples in zip(table, runs, strict=True) if flight.kind == FAULT_FREE}
-    fault_free = list(twins.values())
-    filters = whitening_filters(fault_free, calibration.settle_s)
+    # the sliding bound's two views of the residuals, each with its fault-free flights
+    # (whitened once): as they are, and whitened; each keeps its own threshold above every
+    # fault-free flight, so that together they keep those flights quiet too
+    filters = whitening_filters(list(twins.values()), calibration.settle_s)
+    views = [(lambda flight: flight, twins),
+             (lambda flight: whitened(flight, filters),
+              {twin: whitened(residuals, filters) for twin, residuals in twins.items()})]
     results = []
     for flight, samples in zip(table, runs, strict=True):
         detector = detector_result(flight, samples)
@@ -263,9 +256,11 @@ def judge(table: list[FailureFlight], grid: list[GridFlight], calibration: Calib
         failed = fixed_residuals(samples)
         ratio, bound_delay_s = bound(failed, twins[flight.twin], calibration.settle_s,
                                      flight.reference_s)
-        sliding = ratio >= REQUIRED_SNR and found_by_sliding_bounds(
-            failed, twins[flight.twin], fault_free, filters, calibration.settle_s,
-            flight.reference_s, calibration.fast_reference)
+        sliding = ratio >= REQUIRED_SNR and any(
+            found_by_sliding_bound(view(failed), fault_free[flight.twin],
+                                   list(fault_free.values()), calibration.settle_s,
+                                   flight.reference_s, calibration.fast_reference)
+            for view, fault_free in views)
         results.append(FlightResult(flight.kind, *detector, ratio, bound_delay_s, sliding))
     return results
 
