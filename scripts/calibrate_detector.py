@@ -35,6 +35,8 @@ from uav_fault_estimator.campaigns.campaign import (
     exit_on_failed_tasks,
 )
 from uav_fault_estimator.chain.offline import (
+    CALIBRATION_FIRST_SEED,
+    CALIBRATION_FLIGHTS,
     describe_flights,
     fault_free_flights,
     fly_on_grid_each,
@@ -49,13 +51,11 @@ from uav_fault_estimator.detection.generators import SHIPPED_GENERATORS, generat
 from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
 from uav_fault_estimator.reporting.calibration_output import write_calibration
 
-FIRST_SEED = 101
-
 
 def simulated(count: int, vehicle: str, options: CampaignOptions) -> tuple[list, str]:
     """count fault-free flights of the vehicle flown now, where options say, and the
     calibration file's header saying which."""
-    scenarios = fault_free_flights(count, FIRST_SEED, vehicle=vehicle)
+    scenarios = fault_free_flights(count, CALIBRATION_FIRST_SEED, vehicle=vehicle)
     with Campaign(options) as campaign:
         flights = [flight.detector_flight for flight
                    in fly_on_grid_each(campaign, scenarios, DEFAULT_SAMPLE_PERIOD_S)]
@@ -77,7 +77,7 @@ def recorded(bags: list[Path]) -> tuple[list, str]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE)
-    parser.add_argument("--flights", type=int, default=12)
+    parser.add_argument("--flights", type=int, default=CALIBRATION_FLIGHTS)
     parser.add_argument("--bags", type=Path, nargs="+",
                         help="recordings of fault-free flights to calibrate from, not flying")
     parser.add_argument("--out", type=Path,

@@ -8,14 +8,15 @@ soon the detector finds each (a study).
 The flights: chain.failure_flights (ALFA's failures, the seven model faults as steps and
 ramps, each kind on --flights of the vehicle's fault-free flights, which are flown too;
 seeds from --first-seed: seeds the calibrations never flew; 501, the default, chose the
-fast test's settings and learned the shipped signatures, 901 judges them). The detector runs
-offline on each (detector_node's defaults, the vehicle's shipped calibration and signatures
-or the files given, on its 0.2 s grid) and counts, per kind: the flights with a combined
-alarm within WITHIN_S of the reference (the onset; a ramp's reaching 2 %: ALFA's evaluator
-counts a later one as a miss), the median and largest delay of those found at all, the
-found flights whose first alarm names the failed part (signatures.CAUSE_OF_FAULT), and the
-flights with a combined alarm before the onset (after the detector's settling); and the
-fault-free flights with any alarm. The detector sees what ALFA's logs show: the pinned
+fast test's settings and learned the shipped signatures and templates, 901 judges them).
+The detector runs offline on each (detector_node's defaults, the vehicle's shipped
+calibration and signatures, with the templates the signatures file holds, or the files
+given, on its 0.2 s grid) and counts, per kind: the flights with a combined alarm within
+WITHIN_S of the reference (the onset; a ramp's reaching 2 %: ALFA's evaluator counts a later
+one as a miss), the median and largest delay of those found at all, the found flights whose
+first alarm names the failed part (signatures.CAUSE_OF_FAULT), and the flights with a
+combined alarm before the onset (after the detector's settling); and the fault-free flights
+with any alarm. The detector sees what ALFA's logs show: the pinned
 surface position or throttle is among its inputs, as measured.
 
 The bound: each failed flight's twin is its fault-free flight, the same seed, wind and
@@ -35,7 +36,7 @@ not its onset, so it slides over every flight, each generator's residual taken f
 over the fast test's reference before the window, as the fast test takes it; its threshold
 is the largest value it reaches on any of the fault-free flights after settling (so that none
 alarms, as the targets ask). It runs twice: on the residuals as they are, and on them
-whitened by an autoregressive model (WHITENING_ORDER) of the fault-free flights' own, each
+whitened by an autoregressive model (templates.WHITENING_ORDER) of the fault-free flights' own, each
 run with its own threshold; a detectable flight either finds at the end of WITHIN_S is
 "found by the sliding bound". For Gaussian residuals of that colour no test finds a known
 signal more often at the same false-alarm level (Neyman-Pearson); a detector, which is not
@@ -46,7 +47,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from pathlib import Path
@@ -54,7 +54,6 @@ from statistics import NormalDist
 from typing import NamedTuple
 
 import numpy as np
-from scipy.signal import lfilter
 from uav_aircraft.vehicles import vehicle_names
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
@@ -72,33 +71,30 @@ from uav_fault_estimator.chain.failure_flights import (
 from uav_fault_estimator.chain.offline import GridFlight, fly_on_grid_each
 from uav_fault_estimator.detection.calibration import (
     DEFAULT_SAMPLE_PERIOD_S,
-    Calibration,
 )
 from uav_fault_estimator.detection.detector import (
     DetectorSample,
+    detector_samples,
     first_combined_alarm,
-    run_detector,
+    fixed_residuals,
 )
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
     detector_calibration,
     detector_signatures,
+    self_tuning_detector,
 )
-from uav_fault_estimator.detection.signatures import CAUSE_OF_FAULT, FailureSignatures
+from uav_fault_estimator.detection.signatures import CAUSE_OF_FAULT
+from uav_fault_estimator.detection.templates import (
+    matched_filter,
+    whitened,
+    whitening_filters,
+)
+from uav_fault_estimator.flight_logs.evaluation import ALFA_DETECTION_LIMIT_S as WITHIN_S
 
 FIRST_SEED = 501  # other seeds than the calibrations' (101-112, 301-304) and the studies'
-WITHIN_S = 5.0  # ALFA's evaluator: a detection later than this is a miss
 # The matched filter's signal-to-noise ratio for 90 % detection at a 5 % false-alarm rate.
 REQUIRED_SNR = NormalDist().inv_cdf(0.95) + NormalDist().inv_cdf(0.90)
-WHITENING_ORDER = 4  # the sliding bound's autoregressive model of the residuals' colour
-
-
-def fixed_residuals(samples: list[DetectorSample]) -> tuple[np.ndarray, np.ndarray]:
-    """times (K,) [s] of a detector run's samples (those every generator of its calibration
-    could use), and their residuals with the calibration's parameters fixed, y - phiᵀ theta0
-    (K, G), generators in the calibration's order."""
-    return (np.array([sample.time_s for sample in samples]),
-            np.array([sample.fixed_residual for sample in samples]))
 
 
 Residuals = tuple[np.ndarray, np.ndarray]  # fixed_residuals' times [s] and residuals
@@ -131,27 +127,6 @@ def bound(failed: Residuals, twin: Residuals, settle_s: float, reference_s: floa
             float(delays_s[reached[0]]) if reached.size else None)
 
 
-def matched_filter(signature: np.ndarray, spread: np.ndarray, residuals: np.ndarray,
-                   reference: int) -> np.ndarray:
-    """The matched filter of a signature (L, G) slid over residuals (K, G) of spread (G,):
-    at each window's last sample k, sum over the window's samples and generators of
-    signature * (residual - the generator's mean over the reference samples before the
-    window) / spread^2, over the signature's norm (about N(0, 1) for white residuals of
-    that spread); NaN where the window and its reference do not fit."""
-    length = len(signature)
-    weights = signature / spread ** 2
-    sums = np.vstack([np.zeros(residuals.shape[1]), np.cumsum(residuals, axis=0)])
-    ends = np.arange(length - 1 + reference, len(residuals))
-    starts = ends - length + 1
-    means = (sums[starts] - sums[starts - reference]) / reference
-    correlations = np.column_stack([np.correlate(residuals[:, g], weights[:, g], "valid")
-                                    for g in range(residuals.shape[1])])
-    statistic = np.full(len(residuals), np.nan)
-    statistic[ends] = (np.sum(correlations[starts] - means * weights.sum(axis=0), axis=1)
-                       / math.sqrt(np.sum((signature / spread) ** 2)))
-    return statistic
-
-
 def found_by_sliding_bound(failed: Residuals, twin: Residuals, fault_free: list[Residuals],
                            settle_s: float, reference_s: float, reference: int) -> bool:
     """Whether the matched filter told the twins' difference over (reference_s, reference_s
@@ -171,31 +146,6 @@ def found_by_sliding_bound(failed: Residuals, twin: Residuals, fault_free: list[
         for flight_times_s, flight_residuals in fault_free)
     return bool(matched_filter(signature, spread, failed_residuals, reference)[mine[within][-1]]
                 > threshold)
-
-
-def whitening_filters(fault_free: list[Residuals], settle_s: float,
-                      order: int = WHITENING_ORDER) -> np.ndarray:
-    """Per generator, the prediction-error filter [1, -a_1, ..., -a_order] (G, order + 1) of
-    an autoregressive model of that order, fitted by least squares to the fault-free
-    flights' residuals after settle_s, each flight's mean removed."""
-    columns = []
-    for g in range(fault_free[0][1].shape[1]):
-        rows, targets = [], []
-        for times_s, residuals in fault_free:
-            x = residuals[times_s >= settle_s, g]
-            x = x - x.mean()
-            rows.append(np.column_stack([x[order - i - 1:len(x) - i - 1] for i in range(order)]))
-            targets.append(x[order:])
-        coefficients, *_ = np.linalg.lstsq(np.vstack(rows), np.concatenate(targets), rcond=None)
-        columns.append(np.concatenate(([1.0], -coefficients)))
-    return np.array(columns)
-
-
-def whitened(flight: Residuals, filters: np.ndarray) -> Residuals:
-    """A flight's residuals through each generator's prediction-error filter."""
-    times_s, residuals = flight
-    return times_s, np.column_stack([lfilter(taps, [1.0], residuals[:, g])
-                                     for g, taps in enumerate(filters)])
 
 
 class FlightResult(NamedTuple):
@@ -232,21 +182,27 @@ def detector_result(flight: FailureFlight, samples: list[DetectorSample]
             first.cause == CAUSE_OF_FAULT[fault.name])
 
 
-def judge(table: list[FailureFlight], grid: list[GridFlight], calibration: Calibration,
-          false_alarm_probability: float, signatures: FailureSignatures | None
+def judge(table: list[FailureFlight], grid: list[GridFlight], settings: DetectorSettings
           ) -> list[FlightResult]:
-    """Each flight's FlightResult, from one detector run over each flight."""
-    runs = [run_detector(calibration, flown.detector_flight, false_alarm_probability,
-                         signatures=signatures) for flown in grid]
+    """Each flight's FlightResult, from one run over each flight of the detector the
+    settings describe."""
+    detector = self_tuning_detector(settings)
+    calibration = detector.calibration
+    runs = [detector_samples(detector, flown.detector_flight) for flown in grid]
     twins = {flight.twin: fixed_residuals(samples)
              for flight, samples in zip(table, runs, strict=True) if flight.kind == FAULT_FREE}
     # the sliding bound's two views of the residuals, each with its fault-free flights
     # (whitened once): as they are, and whitened; each keeps its own threshold above every
     # fault-free flight, so that together they keep those flights quiet too
-    filters = whitening_filters(list(twins.values()), calibration.settle_s)
+    filters = whitening_filters([residuals[times_s >= calibration.settle_s]
+                                 for times_s, residuals in twins.values()])
+
+    def whitened_view(flight: Residuals) -> Residuals:
+        return flight[0], whitened(flight[1], filters)
+
     views = [(lambda flight: flight, twins),
-             (lambda flight: whitened(flight, filters),
-              {twin: whitened(residuals, filters) for twin, residuals in twins.items()})]
+             (whitened_view, {twin: whitened_view(residuals)
+                              for twin, residuals in twins.items()})]
     results = []
     for flight, samples in zip(table, runs, strict=True):
         detector = detector_result(flight, samples)
@@ -353,8 +309,7 @@ def main() -> int:
                                 signatures_file=str(arguments.signatures or ""))
     calibration = detector_calibration(settings)
     signatures = detector_signatures(settings, calibration)
-    result = summary(judge(table, grid, calibration, settings.false_alarm_probability,
-                           signatures))
+    result = summary(judge(table, grid, settings))
     print_table(result)
     wall_s = time.monotonic() - started
     print(f"{len(table)} flights in {wall_s:.0f} s")

@@ -11,8 +11,10 @@ ALARM_FIELDS = [
     "string[] channel_names", "float64[] statistic", "float64[] threshold", "bool[] alarm",
     "float64[] parameter_deviation", "float64 parameter_threshold", "bool parameter_alarm",
     "float64[] fast_statistic", "float64[] fast_threshold", "bool[] fast_alarm",
-    "bool combined_alarm", "float64 false_alarm_probability",
-    "float64 fast_false_alarms_per_hour", "string cause",
+    "string[] template_kinds", "float64[] template_statistic", "float64[] template_threshold",
+    "bool[] template_alarm", "bool combined_alarm", "float64 false_alarm_probability",
+    "float64 fast_false_alarms_per_hour", "float64 template_false_alarms_per_hour",
+    "string cause",
 ]
 HEADER = ["std_msgs/Header header", "\tbuiltin_interfaces/Time stamp", "\t\tint32 sec",
           "\t\tuint32 nanosec", "\tstring frame_id"]

@@ -16,18 +16,9 @@ from uav_fault_estimator.detection.calibration import (
     FastTestCalibration,
 )
 from uav_fault_estimator.detection.change_detection import Weibull
-from uav_fault_estimator.detection.detector import run_detector
+from uav_fault_estimator.detection.detector import fixed_residuals, run_detector
 
-from studies.failure_kinds import (
-    REQUIRED_SNR,
-    WHITENING_ORDER,
-    bound,
-    fixed_residuals,
-    found_by_sliding_bound,
-    matched_filter,
-    whitened,
-    whitening_filters,
-)
+from studies.failure_kinds import REQUIRED_SNR, bound, found_by_sliding_bound
 
 PERIOD_S = 0.2
 NORTH = 6  # velocity north in the state (uav_common.channels)
@@ -101,25 +92,6 @@ def test_the_bound_is_the_matched_filters_signal_to_noise_ratio_and_its_delay():
 
 
 @pytest.mark.timeout(30)
-def test_the_matched_filter_slides_as_a_unit_normal_on_white_residuals():
-    """On white residuals of spread 0.3 and a signature whose samples sum to zero per
-    generator (so the reference mean takes nothing away), the slid statistic is N(0, 1);
-    a copy of the signature added at one place raises it there by the signature's norm."""
-    rng = np.random.default_rng(5)
-    residuals = rng.normal(0.0, 0.3, (20_000, 2))
-    signature = np.tile([[0.2, -0.1], [-0.2, 0.1]], (10, 1))  # (20, 2), zero sum
-    spread = np.array([0.3, 0.3])
-    statistic = matched_filter(signature, spread, residuals, 150)
-    assert np.isnan(statistic[:168]).all() and np.isfinite(statistic[169:]).all()
-    assert abs(np.mean(statistic[169:])) < 0.05 and np.std(statistic[169:]) == pytest.approx(
-        1.0, abs=0.03)
-    with_signal = residuals.copy()
-    with_signal[1000:1020] += signature
-    raised = matched_filter(signature, spread, with_signal, 150)[1019] - statistic[1019]
-    assert raised == pytest.approx(math.sqrt(np.sum((signature / spread) ** 2)), rel=1e-9)
-
-
-@pytest.mark.timeout(30)
 def test_the_sliding_bound_finds_a_loss_above_every_fault_free_flights_largest_value():
     """A thrust loss from 60.1 s in white residuals of spread 0.1, ten fault-free flights:
     0.5 and 0.1 m/s^2 (25 and 5 spreads over 5 s) rise above the largest value the filter
@@ -140,25 +112,3 @@ def test_the_sliding_bound_finds_a_loss_above_every_fault_free_flights_largest_v
         assert bound(failed, fault_free[0], 30.0, 60.1)[0] >= REQUIRED_SNR
         assert found_by_sliding_bound(failed, fault_free[0], fault_free, 30.0, 60.1, 150) \
             is found, loss_mps2
-
-
-@pytest.mark.timeout(30)
-def test_the_whitening_filter_of_an_autoregressive_residual_leaves_its_innovations():
-    """Residuals r[k] = 0.8 r[k-1] + e[k] (e of spread 0.1) on three flights, 30 s settling
-    left out: the fitted filter is [1, -0.8, 0, 0, 0] to within sampling, and the whitened
-    residuals are e again after the filter's first samples."""
-    rng = np.random.default_rng(11)
-    times_s = np.arange(3000) * PERIOD_S
-    flights, innovations = [], []
-    for _ in range(3):
-        e = rng.normal(0.0, 0.1, (3000, 1))
-        r = np.zeros_like(e)
-        for k in range(1, 3000):
-            r[k] = 0.8 * r[k - 1] + e[k]
-        flights.append((times_s, r))
-        innovations.append(e)
-    filters = whitening_filters(flights, 30.0)
-    assert filters.shape == (1, WHITENING_ORDER + 1)
-    assert filters[0] == pytest.approx([1.0, -0.8, 0.0, 0.0, 0.0], abs=0.03)
-    _, white = whitened(flights[0], filters)
-    assert np.std(white[10:] - innovations[0][10:]) < 0.01

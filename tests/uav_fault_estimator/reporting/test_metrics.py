@@ -94,14 +94,16 @@ def test_solver_figures_count_failures_but_not_waiting():
 def test_alarm_counts_rates_and_delays():
     """Tested from 30 s (the RLS settling), the ramp fault starts at 60 s: 150 fault-free
     tested samples at 0.2 s. Roll alarms at 40 s (fault-free) and from 65 s; the parameters
-    only at 61 s; the roll fast test from 62 s; the combined alarm (as given) never."""
+    only at 61 s; the roll fast test from 62 s; the engine cut's template at 45 s and from
+    63 s; the combined alarm (as given) never."""
     stamps = np.round(np.arange(1, 1501) * 0.2, 6)
     roll = (stamps == 40.0) | (stamps >= 65.0)
     alarms = AlarmSeries(
         channel_names=["roll"], stamps_s=stamps, alarm=roll[:, None],
         parameter_alarm=stamps == 61.0, combined_alarm=np.zeros(stamps.size, dtype=bool),
         tested=stamps >= 30.0, false_alarm_probability=0.01,
-        fast_alarm=(stamps >= 62.0)[:, None])
+        fast_alarm=(stamps >= 62.0)[:, None], template_kinds=["engine_cut"],
+        template_alarm=((stamps == 45.0) | (stamps >= 63.0))[:, None])
     seeded = SeededSeries(NAMES, SEEDED_STAMPS, seeded_pct(SEEDED_STAMPS))
     summary = alarm_metrics(alarms, seeded)
     assert summary["fault_start_s"] == pytest.approx(60.0)
@@ -113,6 +115,10 @@ def test_alarm_counts_rates_and_delays():
     assert summary["tests"]["fast_roll"] == {"fault_free_alarms": 0,
                                              "fault_free_alarm_rate": 0.0,
                                              "first_alarm_delay_s": pytest.approx(2.0)}
-    assert list(summary["tests"]) == ["roll", "parameters", "fast_roll", "combined"]
+    assert summary["tests"]["template_engine_cut"] == {
+        "fault_free_alarms": 1, "fault_free_alarm_rate": round(1 / 150, 5),
+        "first_alarm_delay_s": pytest.approx(3.0)}
+    assert list(summary["tests"]) == ["roll", "parameters", "fast_roll", "template_engine_cut",
+                                      "combined"]
     assert summary["tests"]["combined"] == {"fault_free_alarms": 0, "fault_free_alarm_rate": 0.0,
                                             "first_alarm_delay_s": None}

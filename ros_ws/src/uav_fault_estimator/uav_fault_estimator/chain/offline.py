@@ -185,6 +185,12 @@ def describe_flights(scenarios: Sequence[Scenario]) -> str:
             + ", ".join(f"{s.wind.north_mps:.2f}/{s.wind.east_mps:.2f}" for s in scenarios))
 
 
+# The detector's calibration flights: fault_free_flights(CALIBRATION_FLIGHTS,
+# CALIBRATION_FIRST_SEED); no study or test judges anything on these seeds.
+CALIBRATION_FLIGHTS = 12
+CALIBRATION_FIRST_SEED = 101
+
+
 def fault_free_flights(count: int, first_seed: int, first_direction_deg: float = 0.0,
                        vehicle: str = DEFAULT_VEHICLE) -> list[Scenario]:
     """count variants of the vehicle's fault-free scenario (its default flight in its own

@@ -21,6 +21,11 @@ bias) moves both windows alike. The combined alarm takes either test (docs/detec
 confirming the fast test by the GLRT kept ALFA's new days as quiet but cost it most of its
 speed in simulation).
 
+With templates (templates.py, learned with the signatures), the template test too: each
+failure's learned shape over the generators, slid over the fixed-parameter residuals
+whitened by their fault-free colour, against the threshold for a stated rate of false
+alarms per flight hour; the combined alarm takes it as well.
+
 The calibration it runs on: calibration.py. No ROS here.
 """
 
@@ -28,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -54,6 +59,11 @@ from uav_fault_estimator.detection.signatures import (
     FailureSignatures,
     signature_features,
     signature_of,
+)
+from uav_fault_estimator.detection.templates import (
+    DEFAULT_TEMPLATE_FALSE_ALARMS_PER_HOUR,
+    FailureTemplates,
+    TemplateTest,
 )
 
 # The fast test's designed false alarms per flight hour, each channel. Chosen on ALFA's
@@ -92,11 +102,13 @@ class DetectorSample:
     after channel (NaN while the RLS settles); the parameter threshold and alarm; per
     channel the fast test's residual (parameters fixed), signed change (NaN while its
     window fills or the RLS settles; its size the statistic), threshold and alarm; the
-    combined alarm (either test); each channel's parameters; and the cause the combined
-    alarm names (empty without one): the failure its signature (fast-test changes and
-    parameter deviations) resembles most (signatures.FailureSignatures) where the detector
-    has signatures, else the kind of the channel whose alarming test lies furthest over its
-    threshold (generators.FAILURE_GENERATORS)."""
+    combined alarm (any test); each channel's parameters; the cause the combined alarm
+    names (empty without one): the failure its signature (fast-test changes and parameter
+    deviations) resembles most (signatures.FailureSignatures) where the detector has
+    signatures, else an alarming template's (the one furthest over its threshold), else the
+    kind of the channel whose alarming test lies furthest over its threshold
+    (generators.FAILURE_GENERATORS); and per template (none without templates)
+    its statistic (NaN while its window fills or the RLS settles), threshold and alarm."""
 
     time_s: float
     residual: np.ndarray
@@ -115,6 +127,9 @@ class DetectorSample:
     theta: dict[str, np.ndarray]
     airspeed_mps: float  # the filtered airspeed the schedule used (NaN: none known)
     cause: str = ""
+    template_statistic: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    template_threshold: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    template_alarm: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def fast_statistic(self) -> np.ndarray:
@@ -143,6 +158,14 @@ def channel_combined_alarm(alarm: np.ndarray, deviates: np.ndarray, fast_alarm: 
     """Per channel, the combined alarm: its GLRT and parameter tests agree (section III.D),
     or its fast test alarms; the detector's combined alarm is raised when some channel's is."""
     return (alarm & deviates) | fast_alarm
+
+
+def fixed_residuals(samples: Sequence[DetectorSample]) -> tuple[np.ndarray, np.ndarray]:
+    """times (K,) [s] of a detector run's samples, and their residuals with the
+    calibration's parameters fixed, y - phiᵀ theta0 (K, G), generators in the calibration's
+    order."""
+    return (np.array([sample.time_s for sample in samples]),
+            np.array([sample.fixed_residual for sample in samples]))
 
 
 def first_combined_alarm(samples: Sequence[DetectorSample], after_s: float = -math.inf
@@ -213,19 +236,28 @@ def flight_samples(flight: Sequence[np.ndarray]) -> Iterator[tuple]:
 class SelfTuningDetector:
     """Feed it every sample; it acts on the calibration's sample grid, with the generators
     the calibration names; its alarms name their cause by the signatures (learned with the
-    calibration: signatures.signature_features; None: by the strongest channel)."""
+    calibration: signatures.signature_features; None: by the strongest channel); with
+    templates (learned with the calibration's generators) it runs the template test too."""
 
     def __init__(self, calibration: Calibration, false_alarm_probability: float,
                  fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR,
-                 signatures: FailureSignatures | None = None) -> None:
+                 signatures: FailureSignatures | None = None,
+                 templates: FailureTemplates | None = None,
+                 template_false_alarms_per_hour: float = DEFAULT_TEMPLATE_FALSE_ALARMS_PER_HOUR
+                 ) -> None:
         if signatures is not None and signatures.features != signature_features(calibration):
             raise ValueError(f"signatures over {', '.join(signatures.features)}: the "
                              "calibration's are over "
                              f"{', '.join(signature_features(calibration))}")
+        if templates is not None and len(templates.spread) != len(calibration.channels):
+            raise ValueError(f"templates over {len(templates.spread)} generators: the "
+                             f"calibration has {len(calibration.channels)}")
         self.calibration = calibration
         self.signatures = signatures
+        self.templates = templates
         self.set_false_alarm_probability(false_alarm_probability)
         self.set_fast_false_alarm_rate(fast_false_alarms_per_hour)
+        self.set_template_false_alarm_rate(template_false_alarms_per_hour)
         self.feed = RegressionFeed(calibration.channel_names, calibration.sample_period_s)
         self.reset()
 
@@ -249,6 +281,14 @@ class SelfTuningDetector:
         self.fast_thresholds = np.array([weibull_threshold(channel.fast.statistic, probability)
                                          for channel in c.channels.values()])
 
+    def set_template_false_alarm_rate(self, false_alarms_per_hour: float) -> None:
+        """The template test's thresholds for this designed rate of false alarms per flight
+        hour (each template), from the next sample on."""
+        self.template_false_alarms_per_hour = false_alarms_per_hour
+        self.template_thresholds = (
+            np.zeros(0) if self.templates is None else
+            self.templates.thresholds(false_alarms_per_hour, self.calibration.sample_period_s))
+
     def reset(self) -> None:
         """Back to the calibration's parameters: after a restart of the source. The count
         of skipped samples is kept."""
@@ -260,6 +300,7 @@ class SelfTuningDetector:
         self.fast = {name: SlidingMeanChange(c.fast_window, c.fast_reference,
                                              channel.fast.residual_std)
                      for name, channel in c.channels.items()}
+        self.template_test = None if self.templates is None else TemplateTest(self.templates)
         self.filtered_airspeed_mps = math.nan
 
     @property
@@ -307,13 +348,16 @@ class SelfTuningDetector:
             deviations.append(parameter_deviations(step.theta, channel, airspeed_offset_mps)
                               if settled else np.full(len(step.theta), math.nan))
             theta[name] = step.theta
+        template = self.template_statistic(np.array(fixed), settled)
+        template_alarm = template > self.template_thresholds
         deviation = np.array([np.max(np.abs(d)) for d in deviations])
         statistic, fast = np.array(statistic), np.array(fast)
         signed_deviations = np.concatenate(deviations)
         alarm = statistic > self.thresholds  # NaN compares False
         deviates = deviation > self.parameter_threshold
         fast_alarm = np.abs(fast) > self.fast_thresholds
-        combined = bool(channel_combined_alarm(alarm, deviates, fast_alarm).any())
+        combined = bool(channel_combined_alarm(alarm, deviates, fast_alarm).any()
+                        or template_alarm.any())
         return DetectorSample(
             time_s=time_s, residual=np.array(residual), statistic=statistic,
             threshold=self.thresholds.copy(), alarm=alarm, parameter_deviation=deviation,
@@ -324,17 +368,38 @@ class SelfTuningDetector:
             combined_alarm=combined, theta=theta, airspeed_mps=self.filtered_airspeed_mps,
             cause=self.cause(signature_of(fast, signed_deviations),
                              np.where(alarm & deviates, statistic / self.thresholds, 0.0),
-                             np.where(fast_alarm, np.abs(fast) / self.fast_thresholds, 0.0))
+                             np.where(fast_alarm, np.abs(fast) / self.fast_thresholds, 0.0),
+                             np.where(template_alarm, template / self.template_thresholds,
+                                      0.0))
             if combined else "",
+            template_statistic=template, template_threshold=self.template_thresholds.copy(),
+            template_alarm=template_alarm,
         )
 
+    def template_statistic(self, fixed_residual: np.ndarray, settled: bool) -> np.ndarray:
+        """Each template's statistic for this sample's fixed-parameter residuals (N,): NaN
+        while its window fills or the RLS settles; empty without templates."""
+        if self.template_test is None:
+            return np.zeros(0)
+        statistic = self.template_test.update(fixed_residual)
+        if statistic is None or not settled:
+            return np.full(len(self.template_thresholds), math.nan)
+        return statistic
+
     def cause(self, signature: np.ndarray, self_tuning_ratio: np.ndarray,
-              fast_ratio: np.ndarray) -> str:
+              fast_ratio: np.ndarray, template_ratio: np.ndarray) -> str:
         """An alarm's cause: the signatures' for its signature (signatures.signature_of), else
-        (no signatures, the signature not yet known) alarm_cause's."""
+        (no signatures, the signature not yet known) the cause of the alarming template
+        furthest over its threshold (ratios of statistic to threshold, 0 where a template
+        does not alarm), else alarm_cause's. The signatures come first: a template answers
+        to other failures' shapes too (the engine cut's to a stuck elevator's pitch-down),
+        and on the dev flights the signatures named more first alarms right (docs/detector.md)."""
         named = "" if self.signatures is None else self.signatures.cause(signature)
-        return named or alarm_cause(self.calibration.channel_names, self_tuning_ratio,
-                                    fast_ratio)
+        if named:
+            return named
+        if np.any(template_ratio > 0.0):
+            return self.templates.causes[int(np.argmax(template_ratio))]
+        return alarm_cause(self.calibration.channel_names, self_tuning_ratio, fast_ratio)
 
     def airspeed_offset_mps(self, airspeed_mps: float) -> float:
         """U - U_ref of the schedule from this sample's airspeed [m/s] (filter_airspeed);
@@ -358,11 +423,22 @@ def alarm_cause(channel_names: Sequence[str], self_tuning_ratio: np.ndarray,
 def run_detector(calibration: Calibration, flight: Sequence[np.ndarray],
                  false_alarm_probability: float,
                  fast_false_alarms_per_hour: float = DEFAULT_FAST_FALSE_ALARMS_PER_HOUR,
-                 signatures: FailureSignatures | None = None) -> list[DetectorSample]:
+                 signatures: FailureSignatures | None = None,
+                 templates: FailureTemplates | None = None,
+                 template_false_alarms_per_hour: float = DEFAULT_TEMPLATE_FALSE_ALARMS_PER_HOUR
+                 ) -> list[DetectorSample]:
     """The detector over one flight (DetectorFlight, or (times, states, controls) without
-    airspeed) from its calibration (and signatures): every sample it makes."""
-    detector = SelfTuningDetector(calibration, false_alarm_probability,
-                                  fast_false_alarms_per_hour, signatures)
+    airspeed) from its calibration (and signatures, templates): every sample it makes."""
+    return detector_samples(SelfTuningDetector(
+        calibration, false_alarm_probability, fast_false_alarms_per_hour, signatures,
+        templates, template_false_alarms_per_hour), flight)
+
+
+def detector_samples(detector: SelfTuningDetector, flight: Sequence[np.ndarray]
+                     ) -> list[DetectorSample]:
+    """Every sample the detector makes over one flight (DetectorFlight, or (times, states,
+    controls) without airspeed), from its calibration's parameters (reset first)."""
+    detector.reset()
     samples = []
     for sample in flight_samples(flight):
         result = detector.update(*sample)

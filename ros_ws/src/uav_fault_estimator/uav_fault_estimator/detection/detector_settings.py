@@ -1,6 +1,7 @@
 """What configures the detector: detector_node's settings, which the detector is made from
 (self_tuning_detector): the calibration it runs, checked against the airframe flown, the
-signatures its alarms name their cause by, and the designed false-alarm rates. The
+signatures its alarms name their cause by, the templates learned with them, and the designed
+false-alarm rates. The
 calibration carries what it was made with (sample period, forgetting factor, GLRT window,
 settling time: calibration.Calibration), so no setting restates it. Each field is the
 detector_node parameter of its name, declared here once with its default, range and meaning
@@ -29,6 +30,11 @@ from uav_fault_estimator.detection.signatures import (
     read_signatures,
     signature_features,
 )
+from uav_fault_estimator.detection.templates import (
+    DEFAULT_TEMPLATE_FALSE_ALARMS_PER_HOUR,
+    FailureTemplates,
+    read_templates,
+)
 
 
 @dataclass(frozen=True)
@@ -36,7 +42,7 @@ class DetectorSettings:
     """The self-tuning detector's settings: the vehicle, its calibration file and the
     airframe flown (empty: the vehicle's shipped calibration, the vehicle as simulated), and
     the designed false-alarm probability per sample of each self-tuning test and the fast
-    test's false alarms per flight hour."""
+    and template tests' false alarms per flight hour."""
 
     vehicle: str = declared_setting(VEHICLE_PARAMETER)
     calibration_file: str = setting(
@@ -46,9 +52,9 @@ class DetectorSettings:
                             "vehicle as simulated (<vehicle>_sim)", "")
     signatures_file: str = setting(
         "failure signatures YAML learned with the calibration's channels (which failed part "
-        "an alarm names); empty: with the vehicle's shipped calibration its "
-        "failure_signatures.yaml, else none (an alarm names the part of its strongest "
-        "channel)", "")
+        "an alarm names, and the template test's shapes where it holds them); empty: with "
+        "the vehicle's shipped calibration its failure_signatures.yaml, else none (an alarm "
+        "names the part of its strongest channel; no template test)", "")
     false_alarm_probability: float = setting(
         "designed P_FA per sample of each self-tuning test (GLRT, parameters; eq. 23-25); a "
         "change moves their thresholds", 0.01,
@@ -57,6 +63,10 @@ class DetectorSettings:
         "designed false alarms per flight hour of each channel's fast test (window of the "
         "residuals with the calibration's parameters); a change moves its thresholds",
         DEFAULT_FAST_FALSE_ALARMS_PER_HOUR, 1e-3, 100.0, live=True)
+    template_false_alarms_per_hour: float = setting(
+        "designed false alarms per flight hour of each template of the template test (a "
+        "failure's learned shape over the whitened residuals); a change moves its thresholds",
+        DEFAULT_TEMPLATE_FALSE_ALARMS_PER_HOUR, 1e-3, 100.0, live=True)
 
 
 def detector_calibration(settings: DetectorSettings) -> Calibration:
@@ -67,30 +77,46 @@ def detector_calibration(settings: DetectorSettings) -> Calibration:
         settings.airframe or simulated_airframe(settings.vehicle))
 
 
-def detector_signatures(settings: DetectorSettings, calibration: Calibration
-                        ) -> FailureSignatures | None:
-    """The signatures the settings name (ValueError with one line when that file cannot be
+def signatures_path(settings: DetectorSettings, calibration: Calibration) -> Path | None:
+    """The signatures file the settings name (ValueError with one line when it cannot be
     read or was learned with other channels than the calibration's); without one, the
     vehicle's shipped signatures where the calibration is its shipped one (they were
     learned with it), else None."""
     if settings.signatures_file:
-        signatures = read_signatures(Path(settings.signatures_file))
-        if signatures.features != signature_features(calibration):
-            raise ValueError(f"signatures file {settings.signatures_file} is over "
-                             f"{', '.join(signatures.features)}, the calibration's "
-                             f"signatures over {', '.join(signature_features(calibration))}")
-        return signatures
+        path = Path(settings.signatures_file)
+        features = read_signatures(path).features
+        if features != signature_features(calibration):
+            raise ValueError(f"signatures file {path} is over {', '.join(features)}, the "
+                             "calibration's signatures over "
+                             f"{', '.join(signature_features(calibration))}")
+        return path
     shipped = load_vehicle(settings.vehicle).failure_signatures_file
     if settings.calibration_file or not shipped.is_file():
         return None
-    signatures = read_signatures(shipped)
-    return signatures if signatures.features == signature_features(calibration) else None
+    same = read_signatures(shipped).features == signature_features(calibration)
+    return shipped if same else None
+
+
+def detector_signatures(settings: DetectorSettings, calibration: Calibration
+                        ) -> FailureSignatures | None:
+    """The signatures of signatures_path (None: none)."""
+    path = signatures_path(settings, calibration)
+    return None if path is None else read_signatures(path)
+
+
+def detector_templates(settings: DetectorSettings, calibration: Calibration
+                       ) -> FailureTemplates | None:
+    """The templates the file of signatures_path holds (None: none)."""
+    path = signatures_path(settings, calibration)
+    return None if path is None else read_templates(path)
 
 
 def self_tuning_detector(settings: DetectorSettings) -> SelfTuningDetector:
-    """The detector the settings describe: their calibration and signatures, at their
-    false-alarm probability and fast-test rate."""
+    """The detector the settings describe: their calibration, signatures and templates, at
+    their false-alarm probability and fast-test and template-test rates."""
     calibration = detector_calibration(settings)
     return SelfTuningDetector(calibration, settings.false_alarm_probability,
                               settings.fast_false_alarms_per_hour,
-                              detector_signatures(settings, calibration))
+                              detector_signatures(settings, calibration),
+                              detector_templates(settings, calibration),
+                              settings.template_false_alarms_per_hour)

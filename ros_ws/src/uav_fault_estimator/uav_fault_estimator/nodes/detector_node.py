@@ -78,6 +78,8 @@ class DetectorNode(Node):
         super().__init__("detector_node")
         p = declare_parameters(self, PARAMETERS, self.retune)
         self.detector = self_tuning_detector(settings_from(DetectorSettings, p))
+        templates = self.detector.templates
+        self.template_kinds = () if templates is None else templates.kinds
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(FaultAlarm, "faults/alarm", qos)
         self.streams = MatchedStreams(self, STREAMS, self.process, self.detector.reset,
@@ -88,8 +90,8 @@ class DetectorNode(Node):
         self.counts = {"published": 0, "combined_alarms": 0}
 
     def retune(self, changes: dict[str, Any]) -> None:
-        """The thresholds for a changed false-alarm probability or fast-test rate, from the
-        next sample on."""
+        """The thresholds for a changed false-alarm probability or fast-test or template-test
+        rate, from the next sample on."""
         if "false_alarm_probability" in changes:
             self.detector.set_false_alarm_probability(changes["false_alarm_probability"])
             self.get_logger().info(
@@ -98,6 +100,10 @@ class DetectorNode(Node):
             self.detector.set_fast_false_alarm_rate(changes["fast_false_alarms_per_hour"])
             self.get_logger().info("fast-test thresholds for "
                                    f"{changes['fast_false_alarms_per_hour']:g} per hour")
+        if "template_false_alarms_per_hour" in changes:
+            rate = changes["template_false_alarms_per_hour"]
+            self.detector.set_template_false_alarm_rate(rate)
+            self.get_logger().info(f"template-test thresholds for {rate:g} per hour")
 
     def process(self, time_s: float, payloads: dict) -> None:
         skipped = self.detector.skipped_samples
@@ -128,9 +134,14 @@ class DetectorNode(Node):
             fast_statistic=sample.fast_statistic.tolist(),
             fast_threshold=sample.fast_threshold.tolist(),
             fast_alarm=sample.fast_alarm.tolist(),
+            template_kinds=list(self.template_kinds),
+            template_statistic=sample.template_statistic.tolist(),
+            template_threshold=sample.template_threshold.tolist(),
+            template_alarm=sample.template_alarm.tolist(),
             combined_alarm=sample.combined_alarm,
             false_alarm_probability=self.detector.false_alarm_probability,
             fast_false_alarms_per_hour=self.detector.fast_false_alarms_per_hour,
+            template_false_alarms_per_hour=self.detector.template_false_alarms_per_hour,
             cause=sample.cause,
         )
 
@@ -138,10 +149,13 @@ class DetectorNode(Node):
         names = self.detector.calibration.channel_names
         alarms = [name for name, on in zip(names, sample.alarm, strict=True) if on]
         fast = [name for name, on in zip(names, sample.fast_alarm, strict=True) if on]
+        shapes = [kind for kind, on in zip(self.template_kinds, sample.template_alarm,
+                                           strict=True) if on]
         if sample.combined_alarm:
             level, text = ERROR, f"fault ({sample.cause or 'kind unknown'}): " + "; ".join(
                 (["GLRT and parameters agree"] if sample.self_tuning_alarm else [])
-                + ([f"fast test on {', '.join(fast)}"] if fast else []))
+                + ([f"fast test on {', '.join(fast)}"] if fast else [])
+                + ([f"shape of {', '.join(shapes)}"] if shapes else []))
         elif alarms or sample.parameter_alarm:
             level, text = WARN, "one test alarms: " + ", ".join(
                 alarms + (["parameters"] if sample.parameter_alarm else []))

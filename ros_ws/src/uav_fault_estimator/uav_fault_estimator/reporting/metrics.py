@@ -12,7 +12,7 @@ estimate rose before it did). Plus the solver's times and failures. No ROS here.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -126,7 +126,7 @@ class AlarmSeries:
     """What detector_node published: stamps (K,) [s]; per-channel GLRT alarms (K, c), the
     parameter alarm (K,) and the combined alarm (K,); whether the tests ran (K,) (not while
     the window fills and the RLS settles); the designed P_FA; per-channel fast-test alarms
-    (K, c)."""
+    (K, c); the template test's kinds (n, none without templates) and alarms (K, n)."""
 
     channel_names: Sequence[str]
     stamps_s: np.ndarray
@@ -136,11 +136,13 @@ class AlarmSeries:
     tested: np.ndarray
     false_alarm_probability: float
     fast_alarm: np.ndarray
+    template_kinds: Sequence[str] = ()
+    template_alarm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), bool))
 
 
 def alarm_metrics(alarms: AlarmSeries, seeded: SeededSeries) -> dict:
-    """Per test (each GLRT channel, the parameters, each fast-test channel, the combined
-    alarm): the alarms in
+    """Per test (each GLRT channel, the parameters, each fast-test channel, each template,
+    the combined alarm): the alarms in
     fault-free time (tested samples before the first seeded fault starts, or the whole
     flight), as a count and as a rate per sample to hold against the designed P_FA, and the
     first alarm's delay after that start."""
@@ -153,6 +155,8 @@ def alarm_metrics(alarms: AlarmSeries, seeded: SeededSeries) -> dict:
     tests |= {"parameters": alarms.parameter_alarm}
     tests |= {f"fast_{name}": alarms.fast_alarm[:, k]
               for k, name in enumerate(alarms.channel_names)}
+    tests |= {f"template_{kind}": alarms.template_alarm[:, k]
+              for k, kind in enumerate(alarms.template_kinds)}
     tests |= {"combined": alarms.combined_alarm}
     summary = {}
     for name, raised in tests.items():

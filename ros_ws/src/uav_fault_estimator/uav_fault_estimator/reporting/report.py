@@ -94,6 +94,8 @@ def alarm_series(alarms: list) -> AlarmSeries | None:
         tested=np.array([np.isfinite(m.statistic).all() for m in alarms], dtype=bool),
         false_alarm_probability=float(alarms[0].false_alarm_probability),
         fast_alarm=np.array([m.fast_alarm for m in alarms], dtype=bool),
+        template_kinds=list(alarms[0].template_kinds),
+        template_alarm=np.array([m.template_alarm for m in alarms], dtype=bool),
     )
 
 
