@@ -187,7 +187,9 @@ def learn_templates(filters: np.ndarray, reference: int, fault_free: Sequence[np
     reaches its threshold (a shape that also fits fault-free manoeuvres only adds false
     alarms); thresholds for false_alarms_per_hour. filters: whitening_filters' of the
     fault-free residuals; fault_free: those residuals whitened (each (K_i, G), settling left
-    out). None when no template is kept."""
+    out). None when no template is kept (or no flight given)."""
+    if not flights:
+        return None
     spread = np.std(np.vstack(fault_free), axis=0)
     probability = per_sample_probability(false_alarms_per_hour, flights[0].difference.shape[0],
                                          sample_period_s)
