@@ -74,14 +74,13 @@ from uav_fault_estimator.detection.calibration import (
 )
 from uav_fault_estimator.detection.detector import (
     DetectorSample,
+    SelfTuningDetector,
     detector_samples,
     first_combined_alarm,
     fixed_residuals,
 )
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
-    detector_calibration,
-    detector_signatures,
     self_tuning_detector,
 )
 from uav_fault_estimator.detection.signatures import CAUSE_OF_FAULT
@@ -182,11 +181,9 @@ def detector_result(flight: FailureFlight, samples: list[DetectorSample]
             first.cause == CAUSE_OF_FAULT[fault.name])
 
 
-def judge(table: list[FailureFlight], grid: list[GridFlight], settings: DetectorSettings
+def judge(table: list[FailureFlight], grid: list[GridFlight], detector: SelfTuningDetector
           ) -> list[FlightResult]:
-    """Each flight's FlightResult, from one run over each flight of the detector the
-    settings describe."""
-    detector = self_tuning_detector(settings)
+    """Each flight's FlightResult, from one run of the detector over each flight."""
     calibration = detector.calibration
     runs = [detector_samples(detector, flown.detector_flight) for flown in grid]
     twins = {flight.twin: fixed_residuals(samples)
@@ -307,9 +304,9 @@ def main() -> int:
     settings = DetectorSettings(vehicle=arguments.vehicle,
                                 calibration_file=str(arguments.calibration or ""),
                                 signatures_file=str(arguments.signatures or ""))
-    calibration = detector_calibration(settings)
-    signatures = detector_signatures(settings, calibration)
-    result = summary(judge(table, grid, settings))
+    detector = self_tuning_detector(settings)
+    calibration, signatures = detector.calibration, detector.signatures
+    result = summary(judge(table, grid, detector))
     print_table(result)
     wall_s = time.monotonic() - started
     print(f"{len(table)} flights in {wall_s:.0f} s")

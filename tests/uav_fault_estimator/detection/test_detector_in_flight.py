@@ -34,7 +34,7 @@ from uav_fault_estimator.detection.change_detection import per_sample_probabilit
 from uav_fault_estimator.detection.detector import DetectorFlight, run_detector
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
-    detector_templates,
+    learned_failures,
 )
 from uav_fault_estimator.detection.generators import SHIPPED_GENERATORS
 from uav_sim.paths import scenarios_dir
@@ -83,9 +83,8 @@ def test_false_alarm_rates_on_held_out_flights(calibration, campaign):
     scenarios = fault_free_flights(12, first_seed=201, first_direction_deg=15.0)
     flights = [flight.detector_flight for flight in fly_on_grid_each(
         campaign, scenarios, calibration.sample_period_s)]
-    settings = DetectorSettings()
-    runs = [run_detector(calibration, flight, P_FA, templates=detector_templates(
-        settings, calibration)) for flight in flights]
+    _, templates = learned_failures(DetectorSettings(), calibration)
+    runs = [run_detector(calibration, flight, P_FA, templates=templates) for flight in flights]
     raised = np.vstack([alarms(samples) for samples in runs])
     rates = raised.mean(axis=0)
     print(f"designed P_FA {P_FA} per sample; {len(raised)} samples; measured: "

@@ -15,7 +15,7 @@ from uav_fault_estimator.detection.detector import SelfTuningDetector
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
     detector_calibration,
-    detector_signatures,
+    learned_failures,
 )
 from uav_fault_estimator.detection.signatures import (
     CAUSE_OF_FAULT,
@@ -121,14 +121,15 @@ def test_the_shipped_signatures_go_with_the_shipped_calibration_and_a_named_file
         tmp_path):
     shipped = DetectorSettings(vehicle="carbon_z")
     calibration = detector_calibration(shipped)
-    signatures = detector_signatures(shipped, calibration)
+    signatures, _ = learned_failures(shipped, calibration)
     assert signatures is not None and signatures.features == signature_features(calibration)
     assert set(signatures.causes) <= set(CAUSES) and signatures.neighbours == 3
     own = dataclasses.replace(shipped, calibration_file=str(shipped_calibration_path("carbon_z")))
-    assert detector_signatures(own, calibration) is None  # a calibration named: none unless named
+    # a calibration named: none unless named
+    assert learned_failures(own, calibration) == (None, None)
     path = tmp_path / "signatures.yaml"
     path.write_text(yaml.safe_dump(signatures_to_dict(
         learned_signatures(CHANNELS, EXAMPLES, neighbours=1))))
     with pytest.raises(ValueError, match=r"signatures file .* is over roll, pitch, yaw, the "
                                          r"calibration's signatures over roll_tracking, "):
-        detector_signatures(dataclasses.replace(own, signatures_file=str(path)), calibration)
+        learned_failures(dataclasses.replace(own, signatures_file=str(path)), calibration)

@@ -17,7 +17,7 @@ from uav_fault_estimator.detection.detector import SelfTuningDetector
 from uav_fault_estimator.detection.detector_settings import (
     DetectorSettings,
     detector_calibration,
-    detector_templates,
+    learned_failures,
 )
 from uav_fault_estimator.detection.signatures import CAUSES
 from uav_fault_estimator.detection.templates import (
@@ -107,7 +107,8 @@ def test_sample_by_sample_the_test_is_the_matched_filter_over_whitened_residuals
         first = templates.length + REFERENCE - 1
         assert all(value is None for value in fed[:first])
         for n, shape in enumerate(templates.shapes):
-            batch = templates.statistic(shape, whitened(residuals, templates.whitening))
+            batch = matched_filter(shape, templates.spread,
+                                   whitened(residuals, templates.whitening), REFERENCE)
             assert np.array([value[n] for value in fed[first:]]) == pytest.approx(
                 batch[first:], abs=1e-12)
         test.reset()
@@ -164,7 +165,8 @@ def test_a_template_is_kept_where_it_finds_its_kind_and_keeps_fault_free_flights
     assert templates.causes == ("engine",) and templates.learned_from == "test"
     assert templates.shapes[0] == pytest.approx(step)
     threshold = templates.thresholds(0.1, PERIOD_S)[0]
-    assert all(np.nanmax(templates.statistic(templates.shapes[0], residuals)) < threshold
+    assert all(np.nanmax(matched_filter(templates.shapes[0], templates.spread, residuals,
+                                        REFERENCE)) < threshold
                for residuals in fault_free)
 
 
@@ -235,10 +237,10 @@ def test_the_shipped_templates_go_with_the_shipped_calibration_only():
     for vehicle in ("carbon_z", "aerosonde"):
         shipped = DetectorSettings(vehicle=vehicle)
         calibration = detector_calibration(shipped)
-        templates = detector_templates(shipped, calibration)
+        _, templates = learned_failures(shipped, calibration)
         assert templates is not None and "engine_cut" in templates.kinds, vehicle
         assert templates.shapes.shape[2] == len(calibration.channels)
         assert set(templates.causes) <= set(CAUSES)
         own = dataclasses.replace(shipped,
                                   calibration_file=str(shipped_calibration_path(vehicle)))
-        assert detector_templates(own, calibration) is None
+        assert learned_failures(own, calibration) == (None, None)

@@ -27,13 +27,14 @@ from uav_fault_estimator.detection.detector import (
 )
 from uav_fault_estimator.detection.signatures import (
     FailureSignatures,
-    read_signatures,
+    load_signatures_file,
     signature_features,
+    signatures_from,
 )
 from uav_fault_estimator.detection.templates import (
     DEFAULT_TEMPLATE_FALSE_ALARMS_PER_HOUR,
     FailureTemplates,
-    read_templates,
+    templates_in,
 )
 
 
@@ -77,46 +78,32 @@ def detector_calibration(settings: DetectorSettings) -> Calibration:
         settings.airframe or simulated_airframe(settings.vehicle))
 
 
-def signatures_path(settings: DetectorSettings, calibration: Calibration) -> Path | None:
-    """The signatures file the settings name (ValueError with one line when it cannot be
-    read or was learned with other channels than the calibration's); without one, the
-    vehicle's shipped signatures where the calibration is its shipped one (they were
-    learned with it), else None."""
-    if settings.signatures_file:
-        path = Path(settings.signatures_file)
-        features = read_signatures(path).features
-        if features != signature_features(calibration):
-            raise ValueError(f"signatures file {path} is over {', '.join(features)}, the "
-                             "calibration's signatures over "
-                             f"{', '.join(signature_features(calibration))}")
-        return path
-    shipped = load_vehicle(settings.vehicle).failure_signatures_file
-    if settings.calibration_file or not shipped.is_file():
-        return None
-    same = read_signatures(shipped).features == signature_features(calibration)
-    return shipped if same else None
-
-
-def detector_signatures(settings: DetectorSettings, calibration: Calibration
-                        ) -> FailureSignatures | None:
-    """The signatures of signatures_path (None: none)."""
-    path = signatures_path(settings, calibration)
-    return None if path is None else read_signatures(path)
-
-
-def detector_templates(settings: DetectorSettings, calibration: Calibration
-                       ) -> FailureTemplates | None:
-    """The templates the file of signatures_path holds (None: none)."""
-    path = signatures_path(settings, calibration)
-    return None if path is None else read_templates(path)
+def learned_failures(settings: DetectorSettings, calibration: Calibration
+                     ) -> tuple[FailureSignatures | None, FailureTemplates | None]:
+    """The signatures and templates of the signatures file the settings name (ValueError
+    with one line when it cannot be read or was learned with other channels than the
+    calibration's); without one, the vehicle's shipped file where the calibration is its
+    shipped one (it was learned with it), else none. The file is read once."""
+    path = Path(settings.signatures_file or load_vehicle(settings.vehicle)
+                .failure_signatures_file)
+    if not settings.signatures_file and (settings.calibration_file or not path.is_file()):
+        return None, None
+    data = load_signatures_file(path)
+    signatures = signatures_from(data, path)
+    if signatures.features != signature_features(calibration):
+        if not settings.signatures_file:
+            return None, None
+        raise ValueError(f"signatures file {path} is over {', '.join(signatures.features)}, "
+                         "the calibration's signatures over "
+                         f"{', '.join(signature_features(calibration))}")
+    return signatures, templates_in(data, path)
 
 
 def self_tuning_detector(settings: DetectorSettings) -> SelfTuningDetector:
     """The detector the settings describe: their calibration, signatures and templates, at
     their false-alarm probability and fast-test and template-test rates."""
     calibration = detector_calibration(settings)
+    signatures, templates = learned_failures(settings, calibration)
     return SelfTuningDetector(calibration, settings.false_alarm_probability,
-                              settings.fast_false_alarms_per_hour,
-                              detector_signatures(settings, calibration),
-                              detector_templates(settings, calibration),
+                              settings.fast_false_alarms_per_hour, signatures, templates,
                               settings.template_false_alarms_per_hour)

@@ -120,12 +120,18 @@ def signatures_to_dict(signatures: FailureSignatures) -> dict[str, Any]:
                                                  strict=True)]}
 
 
-def read_signatures(path: Path) -> FailureSignatures:
-    """The signatures file; ValueError with one line naming it."""
+def load_signatures_file(path: Path) -> Any:
+    """A signatures file's parsed YAML (what signatures_from and templates.templates_in
+    read); ValueError with one line naming it."""
     try:
-        data = yaml.safe_load(Path(path).read_text())
+        return yaml.safe_load(Path(path).read_text())
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
         raise ValueError(f"signatures file {path}: {type(error).__name__}: {error}") from None
+
+
+def signatures_from(data: Any, path: Path) -> FailureSignatures:
+    """The signatures of a signatures file's parsed YAML; ValueError with one line naming
+    the file (path)."""
     mismatch = kind_mismatch(data, SIGNATURES_KEYS, SIGNATURES_FILE)
     if mismatch:
         raise ValueError(f"signatures file {path}: {mismatch}")
@@ -136,3 +142,8 @@ def read_signatures(path: Path) -> FailureSignatures:
             int(data["neighbours"]), str(data["learned_from"]))
     except (KeyError, TypeError, ValueError) as error:
         raise ValueError(f"signatures file {path}: {type(error).__name__}: {error}") from None
+
+
+def read_signatures(path: Path) -> FailureSignatures:
+    """The signatures file; ValueError with one line naming it."""
+    return signatures_from(load_signatures_file(path), path)

@@ -34,7 +34,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from uav_fault_estimator.detection.change_detection import (
     Weibull,
@@ -42,6 +41,7 @@ from uav_fault_estimator.detection.change_detection import (
     weibull_fit,
     weibull_threshold,
 )
+from uav_fault_estimator.detection.signatures import load_signatures_file
 
 WHITENING_ORDER = 4  # the autoregressive model of the fault-free residuals' colour
 # The template test's designed false alarms per flight hour, each template. Chosen on the
@@ -148,10 +148,6 @@ class FailureTemplates:
         probability = per_sample_probability(false_alarms_per_hour, self.length,
                                              sample_period_s)
         return np.array([weibull_threshold(maxima, probability) for maxima in self.maxima])
-
-    def statistic(self, shape: np.ndarray, residuals: np.ndarray) -> np.ndarray:
-        """A shape's matched filter over residuals (K, G) already whitened (K,)."""
-        return matched_filter(shape, self.spread, residuals, self.reference)
 
 
 def maxima_distribution(shape: np.ndarray, spread: np.ndarray, reference: int,
@@ -287,13 +283,17 @@ def templates_from_dict(data: Mapping[str, Any]) -> FailureTemplates:
         learned_from=str(data["learned_from"]))
 
 
+def templates_in(data: Any, path: Path) -> FailureTemplates | None:
+    """The templates a signatures file's parsed YAML holds (None: it holds none); ValueError
+    with one line naming the file (path)."""
+    templates = data.get(TEMPLATES_KEY) if isinstance(data, dict) else None
+    try:
+        return None if templates is None else templates_from_dict(templates)
+    except (KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"templates in {path}: {type(error).__name__}: {error}") from None
+
+
 def read_templates(path: Path) -> FailureTemplates | None:
     """The templates a signatures file holds (None: it holds none); ValueError with one
     line naming the file."""
-    try:
-        data = yaml.safe_load(Path(path).read_text())
-        templates = data.get(TEMPLATES_KEY) if isinstance(data, dict) else None
-        return None if templates is None else templates_from_dict(templates)
-    except (OSError, UnicodeDecodeError, yaml.YAMLError, KeyError, TypeError,
-            ValueError) as error:
-        raise ValueError(f"templates in {path}: {type(error).__name__}: {error}") from None
+    return templates_in(load_signatures_file(path), path)
