@@ -16,6 +16,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import latest_values
 from uav_common.channels import DETECTION_THRESHOLD_PCT, PAPER_FAULT_NAMES
 from uav_common.loopback import free_udp_port
+from uav_common.ros.messages import header
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
 from uav_fault_msgs.msg import AircraftState, FaultAlarm, FaultEstimate
@@ -120,8 +121,9 @@ def test_each_fault_of_the_link_is_said_once_and_the_streams_resume(start_proces
     run_steps(graph, autopilot, 10, attitude=False)  # ATTITUDE stops for 0.5 s
     run_steps(graph, autopilot, 10)
     # the whole link silent past the heartbeat timeout (3 s), then back
-    assert graph.wait("the heartbeat said lost",
-                      lambda: lines_with(node.output(), "no heartbeat of system 1"), 10), (
+    assert graph.wait("the link said lost",
+                      lambda: lines_with(node.output(), "link lost: nothing from system 1"),
+                      10), (
         node.output())
     run_steps(graph, autopilot, 20)
     autopilot.boot_s = 2.0  # the autopilot rebooted
@@ -137,7 +139,7 @@ def test_each_fault_of_the_link_is_said_once_and_the_streams_resume(start_proces
     for said in ("packets failing their checksum or cut short", "system 255 (component 190)",
                  "system 2 (component 1)", "ATTITUDE came out of order",
                  "streams missing: attitude", "streams back: attitude",
-                 "no heartbeat of system 1", "the heartbeat of system 1 is back",
+                 "link lost: nothing from system 1", "link back after",
                  "it rebooted"):
         assert len(lines_with(output, said)) == 1, (said, output)
     values = latest_values(received["/diagnostics"], "/mavlink_node")
@@ -167,9 +169,11 @@ def test_estimates_and_alarms_reach_the_ground_station_and_nothing_else_is_sent(
         for step in range(60):  # 3 s: the right wing's lift over the threshold from 1 s
             values = [over if step >= 20 else 0.5, 0.25, -0.5, 1.0]
             estimates.publish(FaultEstimate(names=list(PAPER_FAULT_NAMES), values_pct=values))
-            alarms.publish(FaultAlarm(channel_names=["roll", "pitch", "yaw"],
-                                      alarm=[step >= 40, False, step >= 40],
-                                      combined_alarm=step >= 40))
+            alarms.publish(FaultAlarm(
+                header=header(10.0 + step * STEP_S), channel_names=["roll", "pitch", "yaw"],
+                alarm=[step >= 40, False, step >= 40], parameter_deviation=[3.0, 0.0, 3.0],
+                parameter_threshold=2.0, fast_alarm=[False] * 3, combined_alarm=step >= 40,
+                cause="aileron" if step >= 40 else ""))
             run_steps(graph, autopilot, 1)
         graph.spin(1.5)
         autopilot.collect()
@@ -185,6 +189,7 @@ def test_estimates_and_alarms_reach_the_ground_station_and_nothing_else_is_sent(
     assert 4 * 4 <= len(named) <= 4 * 8  # at most 2 Hz over 3 s (the first from the start)
     assert ("rw_lift", pytest.approx(over)) in named
     texts = [m.text for m in autopilot.received if m.get_type() == "STATUSTEXT"]
-    assert texts == [f"UAV FDI: rw_lift {over:.0f}%", "UAV FDI: alarm roll,yaw"], texts
+    assert texts == [f"UAV FDI: rw_lift {over:.1f}% over {DETECTION_THRESHOLD_PCT:g}%",
+                     "UAV FDI alarm: aileron (glrt)"], texts
     assert all(m.severity == mavutil.mavlink.MAV_SEVERITY_WARNING
                for m in autopilot.received if m.get_type() == "STATUSTEXT")

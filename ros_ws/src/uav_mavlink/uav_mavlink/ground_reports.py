@@ -1,13 +1,18 @@
 """What mavlink_node tells a ground station over the link, where enabled: the fault
-estimates as NAMED_VALUE_FLOAT and the alarms as STATUSTEXT, so that Mission Planner and
-QGroundControl show them beside the autopilot's own.
+estimates as NAMED_VALUE_FLOAT and the alarms as STATUSTEXT, so that Mission Planner,
+QGroundControl and MAVProxy show them beside the autopilot's own (docs/onboard.md).
 
 MAVLink's fields are short: a NAMED_VALUE_FLOAT's name holds 10 characters, a STATUSTEXT's
-text 50 (pymavlink truncates silently, so the texts here are made to fit). Each estimate
-goes out under a short name (SHORT_NAMES); the texts are said on a change only (an estimate
-reaching the detection threshold, the detector's combined alarm rising), at most one per
-min_interval_s, so that a flickering estimate cannot flood a link that also carries the
-autopilot's telemetry.
+text 50 (pymavlink truncates silently), so every text here is made to fit whole. Each
+estimate goes out under a short name (SHORT_NAMES). A text is said on a change only: the
+detector's combined alarm starting (WARNING: its cause, as faults/alarm names it, and the
+tests that raised it) and ending (NOTICE: how long it lasted), an estimate crossing the
+detection threshold upwards (WARNING) or back (NOTICE), with its value. An alarm that stops
+for less than `alarm_end_hold_s` of flight time and starts again is the same alarm, so a
+flickering test is one onset and one end. Texts leave at most one per `min_interval_s` of
+wall time, in order; an estimate's text still waiting when its estimate crosses back is
+withdrawn (the value NAMED_VALUE_FLOAT carries says the rest), and at most MAX_WAITING texts
+wait (further ones are counted, not sent).
 """
 
 from __future__ import annotations
@@ -20,7 +25,15 @@ from uav_common.channels import DETECTION_THRESHOLD_PCT
 
 NAME_CHARS = 10  # NAMED_VALUE_FLOAT's name
 TEXT_CHARS = 50  # STATUSTEXT's text
-TEXT_SEVERITY = mavlink.MAV_SEVERITY_WARNING  # shown and spoken by the ground stations
+PREFIX = "UAV FDI"  # every text's first word, so a ground station's reader knows its source
+ALARM_SEVERITY = mavlink.MAV_SEVERITY_WARNING  # shown and spoken by the ground stations
+END_SEVERITY = mavlink.MAV_SEVERITY_NOTICE  # shown, not alarming
+MAX_WAITING = 20  # texts held back by the interval; more are counted as dropped
+# The detector's tests, as the texts name them: the self-tuning test (a channel's GLRT and
+# its parameter test agreeing, Blanke & Hansen section III.D), the fast window test and the
+# template (learned failure shape) test: the three that raise the combined alarm.
+TEST_WORDS = ("glrt", "fast", "shape")
+UNKNOWN_CAUSE = "unknown"  # an alarm whose detector names no cause
 # The estimator's columns (uav_common.channels.MODEL_FAULT_NAMES) in at most NAME_CHARS.
 SHORT_NAMES = {
     "right_wing_lift_loss": "rw_lift",
@@ -45,42 +58,110 @@ def named_values(names: Sequence[str], values_pct: Sequence[float]) -> list[tupl
             for name, value in zip(names, values_pct, strict=True)]
 
 
+def alarm_tests(glrt_alarm: Sequence[bool], parameter_deviation: Sequence[float],
+                parameter_threshold: float, fast_alarm: Sequence[bool],
+                template_alarm: Sequence[bool]) -> tuple[str, ...]:
+    """The TEST_WORDS of the tests raising a combined alarm, from faults/alarm's fields:
+    per channel the GLRT alarm, the parameter deviation and the fast alarm, the parameter
+    threshold, per template its alarm. ValueError when the per-channel arrays differ in
+    length."""
+    self_tuning = any(alarm and deviation > parameter_threshold
+                      for alarm, deviation in zip(glrt_alarm, parameter_deviation,
+                                                  strict=True))
+    raised = (self_tuning, any(fast_alarm), any(template_alarm))
+    return tuple(word for word, on in zip(TEST_WORDS, raised, strict=True) if on)
+
+
+def alarm_onset_text(cause: str, tests: Sequence[str]) -> str:
+    """`UAV FDI alarm: CAUSE (TESTS)`; without the tests where they would not fit."""
+    text = f"{PREFIX} alarm: {cause or UNKNOWN_CAUSE}"
+    with_tests = f"{text} ({','.join(tests)})" if tests else text
+    return with_tests if len(with_tests) <= TEXT_CHARS else text[:TEXT_CHARS]
+
+
+def alarm_end_text(cause: str, duration_s: float) -> str:
+    """`UAV FDI alarm over: CAUSE, N s` (the alarm's length in flight time)."""
+    return f"{PREFIX} alarm over: {cause or UNKNOWN_CAUSE}, {duration_s:.0f} s"[:TEXT_CHARS]
+
+
+def estimate_text(name: str, value_pct: float, over: bool) -> str:
+    """`UAV FDI: NAME V% over 2%` or `... under 2%` (name: the short one)."""
+    side = "over" if over else "under"
+    return f"{PREFIX}: {name} {value_pct:.1f}% {side} {DETECTION_THRESHOLD_PCT:g}%"[:TEXT_CHARS]
+
+
+@dataclass(frozen=True)
+class GroundText:
+    """One STATUSTEXT: its MAV_SEVERITY and its text (at most TEXT_CHARS)."""
+
+    severity: int
+    text: str
+    key: str = ""  # what it reports: "alarm", or an estimate's short name
+
+
 @dataclass
-class AlarmTexts:
-    """The STATUSTEXT lines of a flight's estimates and alarms, each said once when it
-    starts, at most one per min_interval_s [s, the stamps' time]; what comes within the
-    interval is said with the next line."""
+class AlarmState:
+    """The combined alarm as told: on since onset_s, off since off_s (None while on) [s,
+    flight time], its cause at the onset."""
 
-    min_interval_s: float
-    said_s: float | None = None  # when the last line was said [s]
-    pending: list[str] = field(default_factory=list)
-    estimates_over: frozenset[str] = frozenset()  # short names at or over the threshold
-    alarm_on: bool = False
+    onset_s: float
+    cause: str
+    off_s: float | None = None
 
-    def estimates(self, time_s: float, names: Sequence[str],
-                  values_pct: Sequence[float]) -> str | None:
-        """The line to send for the estimates [%] at time_s [s], or None."""
-        values = dict(named_values(names, values_pct))
-        over = frozenset(name for name, value in values.items()
-                         if value >= DETECTION_THRESHOLD_PCT)
-        self.pending += [f"{name} {values[name]:.0f}%"
-                         for name in sorted(over - self.estimates_over)]
-        self.estimates_over = over
-        return self._line(time_s)
 
-    def alarm(self, time_s: float, combined_alarm: bool, channels: Sequence[str]) -> str | None:
-        """The line to send for the detector's combined alarm at time_s [s] (channels: the
-        generators over their thresholds), or None."""
-        if combined_alarm and not self.alarm_on:
-            self.pending.append("alarm " + ",".join(channels))
-        self.alarm_on = combined_alarm
-        return self._line(time_s)
+@dataclass
+class GroundTexts:
+    """The STATUSTEXTs of a flight's estimates and alarms (module docstring): events in,
+    texts out through `due`."""
 
-    def _line(self, time_s: float) -> str | None:
-        if not self.pending or (self.said_s is not None
-                                and time_s - self.said_s < self.min_interval_s):
+    min_interval_s: float  # least wall time between two texts [s]
+    alarm_end_hold_s: float  # flight time an alarm is off before its end is said [s]
+    said_s: float | None = None  # wall time of the last text [s]
+    waiting: list[GroundText] = field(default_factory=list)
+    dropped: int = 0  # texts not sent: more than MAX_WAITING were waiting
+    over: set[str] = field(default_factory=set)  # short names told over the threshold
+    alarm_state: AlarmState | None = None  # the alarm told on; None while none is
+
+    def estimates(self, names: Sequence[str], values_pct: Sequence[float]) -> None:
+        """The newest estimates [%]: a text for each crossing the threshold."""
+        for name, value in named_values(names, values_pct):
+            over = value >= DETECTION_THRESHOLD_PCT
+            if over == (name in self.over):
+                continue
+            (self.over.add if over else self.over.discard)(name)
+            waiting = [text for text in self.waiting if text.key == name]
+            if waiting:  # crossed back before its text left: withdrawn
+                self.waiting.remove(waiting[0])
+            else:
+                self._wait(GroundText(ALARM_SEVERITY if over else END_SEVERITY,
+                                      estimate_text(name, value, over), name))
+
+    def alarm(self, flight_s: float, combined_alarm: bool, cause: str,
+              tests: Sequence[str]) -> None:
+        """The detector's combined alarm at flight_s [s], its cause and raising tests."""
+        state = self.alarm_state
+        if combined_alarm and state is None:
+            self.alarm_state = AlarmState(flight_s, cause)
+            self._wait(GroundText(ALARM_SEVERITY, alarm_onset_text(cause, tests), "alarm"))
+        elif combined_alarm and state is not None:
+            state.off_s = None
+        elif state is not None and state.off_s is None:
+            state.off_s = flight_s
+        elif state is not None and flight_s - state.off_s >= self.alarm_end_hold_s:
+            self.alarm_state = None
+            self._wait(GroundText(END_SEVERITY, alarm_end_text(
+                state.cause, state.off_s - state.onset_s), "alarm"))
+
+    def due(self, now_s: float) -> GroundText | None:
+        """The next text to send at wall time now_s [s], if the interval allows one."""
+        if not self.waiting or (self.said_s is not None
+                                and now_s - self.said_s < self.min_interval_s):
             return None
-        line = "UAV FDI: " + "; ".join(self.pending)
-        self.pending.clear()
-        self.said_s = time_s
-        return line if len(line) <= TEXT_CHARS else line[:TEXT_CHARS - 3] + "..."
+        self.said_s = now_s
+        return self.waiting.pop(0)
+
+    def _wait(self, text: GroundText) -> None:
+        if len(self.waiting) < MAX_WAITING:
+            self.waiting.append(text)
+        else:
+            self.dropped += 1

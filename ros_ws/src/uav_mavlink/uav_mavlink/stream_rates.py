@@ -5,8 +5,8 @@ ArduPlane streams its groups at 1 Hz unless told otherwise (its SRn_* parameters
 MAVLink channel of the link, renamed MAV(n+1)_* in ArduPilot 4.7; a reboot applies them);
 PX4's onboard mode streams ATTITUDE at 100 Hz and most others at 10-50 Hz, and a slow one is
 raised with its `mavlink stream` command (in the SD card's etc/extras.txt to keep it) or, when
-the link's data rate throttles every stream, with MAV_n_RATE. ../shared/MAVLINK.md gives the
-groups and defaults.
+the link's data rate throttles every stream, with MAV_n_RATE. docs/onboard.md (Stream rates)
+gives the groups and their defaults.
 """
 
 from __future__ import annotations

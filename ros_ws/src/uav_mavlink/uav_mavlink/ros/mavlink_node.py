@@ -15,9 +15,10 @@ autopilot's wind estimate, WIND or WIND_COV, through the paper's filter), `autop
 vertical velocity), `/clock` when `publish_clock`, and
 `/diagnostics` (the link, each message type's rate, the streams missing). Sends its own
 heartbeat and, where enabled, the fault estimates (`faults/estimate`) as NAMED_VALUE_FLOAT and
-the alarms (an estimate reaching the detection threshold, `faults/alarm`'s combined alarm) as
-STATUSTEXT (uav_mavlink.ground_reports); nothing else (uav_mavlink.link: read-only to the
-aircraft). Each fault of the link (the heartbeat lost and back, another system on the link,
+the alarms (`faults/alarm`'s combined alarm starting and ending, an estimate crossing the
+detection threshold) as STATUSTEXT (uav_mavlink.ground_reports); nothing else
+(uav_mavlink.link: read-only to the aircraft). Each fault of the link (the link lost and back,
+judged with the stream rates by uav_mavlink.link_watch; another system on the link,
 packets failing their checksum, readings out of order, a stream missing and back, a reboot,
 the link itself failing) is said once in the log and counted on `/diagnostics`.
 """
@@ -39,6 +40,7 @@ from rosgraph_msgs.msg import Clock
 from uav_aircraft.airframe import load_airframe
 from uav_aircraft.vehicle_parameter import VEHICLE_PARAMETER
 from uav_aircraft.vehicles import load_vehicle
+from uav_common.message_fields import stamp_seconds
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
     air_data_message,
@@ -74,12 +76,12 @@ from uav_mavlink.autopilot_messages import (
     WIND,
     read_message,
 )
-from uav_mavlink.ground_reports import TEXT_SEVERITY, AlarmTexts, named_values
+from uav_mavlink.ground_reports import GroundTexts, alarm_tests, named_values
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
+from uav_mavlink.link_watch import LinkWatch
 from uav_mavlink.project_streams import StreamConversion
 from uav_mavlink.sample_assembly import Sample, SampleAssembly, ros_offset_ns
 from uav_mavlink.servo_setup import ServoParameterReads, airframe_from_servo_parameters
-from uav_mavlink.stream_rates import advice, slow_messages
 
 PARAMETERS = {
     "connection": ParameterSpec(
@@ -123,9 +125,9 @@ PARAMETERS = {
         "time constant of the filter the autopilot's wind estimate goes through (embedded-"
         "estimation paper eq. 4; the scenarios' 10 s) [s]", 10.0, 0.1, 1000.0),
     "rate_window_s": ParameterSpec(
-        "wall time over which each message's rate is measured before it is judged too slow "
-        "for the chain (said once per message, with the setting that raises it) [s]", 5.0,
-        1.0, 600.0),
+        "time the link must be alive (heartbeat or streams arriving) over which each "
+        "message's rate is measured before it is judged too slow for the chain (said once "
+        "per message, with the setting that raises it) [s, wall time]", 5.0, 1.0, 600.0),
     "boot_time_is_ros_time": ParameterSpec(
         "the autopilot's boot time is ROS time already (an autopilot played by the simulator "
         "on its /clock): stamp with it as it is, instead of mapping it by the whole seconds "
@@ -135,18 +137,24 @@ PARAMETERS = {
     "ground_estimates_hz": ParameterSpec(
         "send the newest fault estimates (faults/estimate) to the ground station as "
         "NAMED_VALUE_FLOAT, one per fault under a short name, at most this often; 0: none "
-        "[Hz, wall time]", 0.0, 0.0, 10.0),
+        "[Hz, wall time]", 1.0, 0.0, 10.0),
     "ground_alarms": ParameterSpec(
-        "send a STATUSTEXT when an estimate reaches the detection threshold or the "
-        "detector's combined alarm (faults/alarm) rises", False),
+        "send a STATUSTEXT when the detector's combined alarm (faults/alarm) starts "
+        "(WARNING: its cause and tests) and ends (NOTICE: its length), and when an estimate "
+        "crosses the detection threshold (WARNING over, NOTICE back under)", True),
     "ground_text_interval_s": ParameterSpec(
-        "the least time between two STATUSTEXT lines; what comes meanwhile goes with the "
-        "next [s, wall time]", 5.0, 1.0, 600.0),
+        "the least time between two STATUSTEXT lines; lines wait their turn, in order "
+        "[s, wall time]", 1.0, 0.1, 600.0),
+    "ground_alarm_end_hold_s": ParameterSpec(
+        "how long the combined alarm stays off before its end is said: a shorter pause is "
+        "the same alarm, so a flickering test gives one onset and one end [s, flight time]",
+        3.0, 0.0, 60.0),
     "qos": QOS_PARAMETER,
 }
 READ_PERIOD_S = 0.005  # how often the link is read [s, wall time]
 HEARTBEAT_PERIOD_S = 1.0  # the onboard computer's heartbeat [s, wall time]
-HEARTBEAT_LOST_S = 3.0  # no autopilot heartbeat for this long: the link is lost [s]
+LINK_LOST_S = 3.0  # nothing from the autopilot for this long: the link is lost [s]
+TEXT_PERIOD_S = 0.1  # how often waiting STATUSTEXT lines are looked at [s, wall time]
 _WALL = RosClock(clock_type=ClockType.STEADY_TIME)
 
 
@@ -185,34 +193,27 @@ class MavlinkNode(Node):
         # the servo parameters being read; None when not asked for, or done
         self.servo_reads = ServoParameterReads() if p["servo_map_from_autopilot"] else None
         self.servo_map = "file"  # where the map in use comes from: file, autopilot
-        self.heartbeat_s: float | None = None  # wall time of its last heartbeat [s]
         # ROS time minus the autopilot's boot time [ns]: integers, as a float of seconds
         # since 1970 resolves only 0.24 us
         self.offset_ns: int | None = None
         self.last_sample: Sample | None = None
-        self.window: Counter[str] = Counter()  # message types in the rate window
-        self.rates_hz: dict[str, float] = {}  # each message type's rate in the last window
-        self.window_start_s: float | None = None  # wall time the window opened [s]
-        self.slow: list[str] = []  # messages last judged too slow
-        self.warned: set[str] = set()  # slow messages already said
-        self.required_hz = {
+        self.watch = LinkWatch(LINK_LOST_S, p["rate_window_s"], required_hz={
             "ATTITUDE": 1.0 / p["sample_period_s"],
             "GLOBAL_POSITION_INT": 1.0 / p["position_max_age_s"],
             "VFR_HUD": 1.0 / p["air_data_max_age_s"],
-            "SERVO_OUTPUT_RAW": 1.0 / p["outputs_max_age_s"]}
-        self.optional_hz = {"LOCAL_POSITION_NED": 1.0 / p["position_max_age_s"],
-                            **dict.fromkeys(("RAW_IMU", "SCALED_IMU2", "HIGHRES_IMU"),
-                                            1.0 / p["attitude_max_age_s"]),
-                            **dict.fromkeys(("NAV_CONTROLLER_OUTPUT", "POSITION_TARGET_GLOBAL_INT",
-                                             "WIND", "WIND_COV", "RPM"),
-                                            1.0 / p["slow_max_age_s"])}
+            "SERVO_OUTPUT_RAW": 1.0 / p["outputs_max_age_s"]}, optional_hz={
+            "LOCAL_POSITION_NED": 1.0 / p["position_max_age_s"],
+            **dict.fromkeys(("RAW_IMU", "SCALED_IMU2", "HIGHRES_IMU"),
+                            1.0 / p["attitude_max_age_s"]),
+            **dict.fromkeys(("NAV_CONTROLLER_OUTPUT", "POSITION_TARGET_GLOBAL_INT", "WIND",
+                             "WIND_COV", "RPM"), 1.0 / p["slow_max_age_s"])})
         self.counts = Counter()  # samples, reboots, bad packets, other systems' messages
         self.said: set[str] = set()  # link faults said once per node's life
-        self.heartbeat_lost = False
         self.other_systems: set[int] = set()
         self.missing: tuple[str, ...] = ()  # streams missing at the last sample
         self.heard_s: dict[str, float] = {}  # each stream's last reading [s, wall time]
-        self.alarm_texts = AlarmTexts(p["ground_text_interval_s"])
+        self.ground_texts = GroundTexts(p["ground_text_interval_s"],
+                                        p["ground_alarm_end_hold_s"])
         self.estimates_sent_s = -math.inf  # wall time of the last NAMED_VALUE_FLOATs [s]
         if p["ground_estimates_hz"] > 0 or p["ground_alarms"]:
             self.create_subscription(FaultEstimate, "faults/estimate", self.on_estimate, qos)
@@ -223,6 +224,8 @@ class MavlinkNode(Node):
         self.create_timer(READ_PERIOD_S, self.read_link, clock=_WALL)
         self.reopen_s = 0.0  # wall time of the last attempt to open a failed link [s]
         self.create_timer(HEARTBEAT_PERIOD_S, self.send_heartbeat, clock=_WALL)
+        if p["ground_alarms"]:
+            self.create_timer(TEXT_PERIOD_S, self.send_texts, clock=_WALL)
         self.get_logger().info(
             f"listening on {p['connection']} for "
             f"{'the first autopilot' if not self.target_system else f'system {self.target_system}'}"
@@ -237,11 +240,22 @@ class MavlinkNode(Node):
                 self._reopen()
             while self.link is not None and (message := self.link.recv_msg()) is not None:
                 self.take(message)
+            self._check_link()
         except OSError as error:
             if self.link is not None:  # said when it fails, not at every attempt to reopen
                 self.get_logger().error(f"link {self.parameters['connection']} failed "
                                         f"({error}): opening it again every second")
             self.link, self.reopen_s = None, time.monotonic()
+
+    def _check_link(self) -> None:
+        """The link lost or back and the streams too slow, judged once every waiting
+        message is read (a node held up is not a silent link), each said once."""
+        for line in self.watch.check(time.monotonic(), self.target_system, self.autopilot):
+            # two call sites: rclpy fixes a call site's severity at its first call
+            if line.level == "warning":
+                self.get_logger().warning(line.text)
+            else:
+                self.get_logger().info(line.text)
 
     def _reopen(self) -> None:
         if time.monotonic() - self.reopen_s < HEARTBEAT_PERIOD_S:
@@ -310,14 +324,15 @@ class MavlinkNode(Node):
             return
         if is_autopilot_heartbeat(message) and self._is_target(message.get_srcSystem()):
             self._heard(message)
+            self.watch.heard(time.monotonic(), kind)
             return
         if not self.target_system or message.get_srcSystem() != self.target_system:
             self._other_system(message)
             return
+        self.watch.heard(time.monotonic(), kind)
         if kind == "PARAM_VALUE":
             self._take_servo_parameter(message)
             return
-        self.window[kind] += 1
         reading = read_message(message)
         if reading is None:
             return
@@ -363,12 +378,6 @@ class MavlinkNode(Node):
             self.autopilot_component = heartbeat.get_srcComponent()
             self.get_logger().info(f"heard {self.autopilot} as system {self.target_system}")
             self._read_servo_setup()
-        if self.heartbeat_lost:
-            self.heartbeat_lost = False
-            self.get_logger().info(f"the heartbeat of system {self.target_system} is back")
-        self.heartbeat_s = time.monotonic()
-        if self.window_start_s is None:
-            self.window_start_s = self.heartbeat_s
 
     def publish(self, sample: Sample) -> None:
         """The sample on every stream, stamped with its boot time mapped to ROS time."""
@@ -414,7 +423,7 @@ class MavlinkNode(Node):
 
     def on_estimate(self, message: FaultEstimate) -> None:
         """The estimates to the ground station: NAMED_VALUE_FLOAT at most
-        ground_estimates_hz, a STATUSTEXT for one reaching the threshold."""
+        ground_estimates_hz, a STATUSTEXT for one crossing the threshold."""
         now_s = time.monotonic()
         hz = self.parameters["ground_estimates_hz"]
         if hz > 0 and now_s - self.estimates_sent_s >= 1.0 / hz:
@@ -424,19 +433,31 @@ class MavlinkNode(Node):
                 self._send(lambda link, n=name, v=value: link.mav.named_value_float_send(
                     boot_ms, n.encode(), v))
         if self.parameters["ground_alarms"]:
-            self._send_text(self.alarm_texts.estimates(now_s, message.names,
-                                                       message.values_pct))
+            self.ground_texts.estimates(message.names, message.values_pct)
+            self.send_texts()
 
     def on_alarm(self, message: FaultAlarm) -> None:
-        channels = [name for name, on in zip(message.channel_names, message.alarm,
-                                             strict=True) if on]
-        self._send_text(self.alarm_texts.alarm(time.monotonic(), message.combined_alarm,
-                                               channels))
+        """The detector's combined alarm, its cause and the tests raising it, to the
+        ground texts (onset and end said once each)."""
+        try:
+            tests = alarm_tests(message.alarm, message.parameter_deviation,
+                                message.parameter_threshold, message.fast_alarm,
+                                message.template_alarm)
+        except ValueError:  # zip(strict=True): arrays of different lengths
+            self.counts["malformed_alarms"] += 1
+            self._say_once("malformed_alarm", "faults/alarm with per-channel arrays of "
+                           "different lengths: ignored, counted on /diagnostics")
+            return
+        self.ground_texts.alarm(stamp_seconds(message.header.stamp), message.combined_alarm,
+                                message.cause, tests)
+        self.send_texts()
 
-    def _send_text(self, text: str | None) -> None:
+    def send_texts(self) -> None:
+        """The next waiting STATUSTEXT, when the interval since the last one has passed."""
+        text = self.ground_texts.due(time.monotonic())
         if text is not None:
-            self.get_logger().info(f"to the ground station: {text}")
-            self._send(lambda link: link.mav.statustext_send(TEXT_SEVERITY, text.encode()))
+            self.get_logger().info(f"to the ground station: {text.text}")
+            self._send(lambda link: link.mav.statustext_send(text.severity, text.text.encode()))
 
     def _send(self, send: Callable[[Any], None]) -> None:
         """send(link) if the link is open (a failed link is reopened by read_link)."""
@@ -449,59 +470,42 @@ class MavlinkNode(Node):
         return 0 if self.last_sample is None else round(self.last_sample.boot_time_s * 1000)
 
     def report(self) -> None:
-        """Diagnostics: the link, each message type's rate over the last rate window, the
+        """Diagnostics: the link, each message type's rate over the last judged window, the
         streams missing and those too slow."""
         now_s = time.monotonic()
-        self._judge_rates(now_s)
+        watch = self.watch
         rates = {f"rate_{kind.lower()}_hz": f"{hz:.1f}"
-                 for kind, hz in sorted(self.rates_hz.items())}
+                 for kind, hz in sorted(watch.rates_hz.items())}
         missing = self._heard_missing(self.last_sample.missing if self.last_sample else ())
         stale = [stream for stream, heard_s in sorted(self.heard_s.items())
                  if now_s - heard_s > self.assembly.max_age_s[stream]]
         values = {"autopilot": self.autopilot or "-", "system": self.target_system,
+                  "link": "alive" if watch.alive else "lost" if watch.heard_s else "not heard",
+                  "link_losses": watch.losses,
                   "servo_map": self.servo_map if self.servo_reads is None else "file, "
                   f"reading the autopilot's ({len(self.servo_reads.values)} answered)",
                   "missing": ", ".join(missing) or "none",
                   "not_streamed": ", ".join(sorted(set(self.assembly.max_age_s)
                                                    - set(self.heard_s))) or "none",
                   "stale": ", ".join(stale) or "none",
-                  "too_slow": ", ".join(self.slow) or "none",
+                  "too_slow": ", ".join(watch.slow) or "none",
                   "out_of_order": self.assembly.out_of_order,
+                  "ground_texts_waiting": len(self.ground_texts.waiting),
+                  "ground_texts_dropped": self.ground_texts.dropped,
                   # matched on this side: a subscriber's own match can come first
                   "subscribed": ", ".join(
                       publisher.topic_name.lstrip("/") for publisher in self.publishers_.values()
                       if publisher.get_subscription_count() > 0) or "none",
                   **self.counts, **rates}
-        if self.heartbeat_s is None or now_s - self.heartbeat_s > HEARTBEAT_LOST_S:
-            if self.heartbeat_s is not None and not self.heartbeat_lost:
-                self.heartbeat_lost = True
-                self.get_logger().warning(
-                    f"no heartbeat of system {self.target_system} for {HEARTBEAT_LOST_S:g} s: "
-                    "the streams it left are published as missing until it returns")
-            self.diagnostics.update(WARN, "no autopilot heartbeat", values)
-        elif self.slow:
-            self.diagnostics.update(WARN, "streams too slow: " + ", ".join(self.slow), values)
+        if not watch.alive:
+            self.diagnostics.update(WARN, "link lost" if watch.heard_s else
+                                    "no autopilot heard", values)
+        elif watch.slow:
+            self.diagnostics.update(WARN, "streams too slow: " + ", ".join(watch.slow), values)
         elif missing:
             self.diagnostics.update(WARN, "streams missing: " + ", ".join(missing), values)
         else:
             self.diagnostics.update(OK, f"linked to {self.autopilot}", values)
-
-    def _judge_rates(self, now_s: float) -> None:
-        """At the end of each rate window: the messages too slow, each said once."""
-        if self.window_start_s is None or now_s - self.window_start_s < self.parameters[
-                "rate_window_s"]:
-            return
-        elapsed_s = now_s - self.window_start_s
-        self.rates_hz = {kind: count / elapsed_s for kind, count in self.window.items()}
-        self.slow = slow_messages(self.rates_hz, self.required_hz, self.optional_hz)
-        for message in self.slow:
-            if message not in self.warned:
-                needed_hz = {**self.required_hz, **self.optional_hz}[message]
-                self.get_logger().warning(advice(message, self.rates_hz.get(message, 0.0),
-                                                 round(needed_hz, 1), self.autopilot))
-                self.warned.add(message)
-        self.window.clear()
-        self.window_start_s = now_s
 
 
 def main(args: list[str] | None = None) -> int:
