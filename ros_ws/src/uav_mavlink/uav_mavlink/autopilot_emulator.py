@@ -2,9 +2,10 @@
 or PX4 streams, each at its stream's rate on the autopilot's boot clock (the flight's time).
 
 The inverse of autopilot_messages, in the units and integer fields the link carries
-(../shared/MAVLINK.md): ATTITUDE [rad], GLOBAL_POSITION_INT [degE7, mm, cm/s, cdeg], VFR_HUD
-(airspeed [m/s], throttle [%]), SERVO_OUTPUT_RAW (PWM [us] through the airframe's servo
-mapping, rounded to whole microseconds), NAV_CONTROLLER_OUTPUT [deg], and the stack's own:
+(docs/onboard.md, MAVLink fields and units): ATTITUDE [rad], GLOBAL_POSITION_INT [degE7,
+mm, cm/s, cdeg], VFR_HUD (airspeed [m/s], throttle [%]), SERVO_OUTPUT_RAW (PWM [us] through
+the airframe's servo mapping, rounded to whole microseconds), NAV_CONTROLLER_OUTPUT [deg],
+and the stack's own:
 ArduPlane's WIND (where the wind comes from [deg], |w|, w_D) and RPM; PX4's WIND_COV and
 LOCAL_POSITION_NED. A HEARTBEAT once a second says which stack it is.
 """

@@ -1,9 +1,10 @@
 """What each MAVLink message an autopilot streams carries, in the project's channels and units.
 
 One function per message (pymavlink's decoded message in, a `Reading` out): fields, units and
-conventions as ../shared/MAVLINK.md gives them from the MAVLink XML and the ArduPlane and PX4
-sources. The project's conventions are uav_common.channels': NED, radians, SI, a positive
-elevator pitching nose down (that mapping is the airframe's, from the raw outputs).
+conventions as docs/onboard.md (MAVLink fields and units) gives them from the MAVLink XML
+and the ArduPlane and PX4 sources. The project's conventions are uav_common.channels': NED,
+radians, SI, a positive elevator pitching nose down (that mapping is the airframe's, from the
+raw outputs).
 
 - ATTITUDE: roll, pitch, yaw [rad] and the body rates p, q, r [rad/s]. (ArduPlane subtracts
   its pitch trim from the pitch it sends unless told not to: sample_assembly adds it back.)

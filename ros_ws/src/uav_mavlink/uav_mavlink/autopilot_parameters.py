@@ -2,7 +2,7 @@
 (SERVOn_FUNCTION, _MIN, _MAX, _TRIM, _REVERSED for the outputs n = 1..16) and its pitch trim
 (PTCH_TRIM_DEG), each with the MAVLink type ArduPilot declares it with. No ROS here.
 
-What ArduPilot's parameters mean (../shared/MAVLINK.md, SRV_Channel.h):
+What ArduPilot's parameters mean (docs/onboard.md, MAVLink fields and units; SRV_Channel.h):
 - FUNCTION: 4 aileron, 19 elevator, 21 rudder, 70 throttle, 0 disabled (an output the
   airframe does not map). A copy of a surface (the airframe's `mixed`: a second aileron
   servo) drives the same function.

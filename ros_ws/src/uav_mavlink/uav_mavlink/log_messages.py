@@ -2,7 +2,7 @@
 autopilot's boot time it went out at: what log_streamer plays to a link. No ROS here.
 
 The logs are read with the project's flight-log readers (uav_fault_estimator.flight_logs)
-and each message is packed as autopilot_emulator packs it (units: ../shared/MAVLINK.md).
+and each message is packed as autopilot_emulator packs it (units: docs/onboard.md).
 
 ALFA's flight folders (ArduPlane logged through MAVROS, one CSV file a topic): each topic
 was made by MAVROS from one message, so each row becomes that message again (MAVROS's ENU
