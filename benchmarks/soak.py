@@ -35,7 +35,8 @@ from uav_common.channels import CONTROL_CHANNELS, PAPER_FAULT_NAMES, STATE_CHANN
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.messages import header
 from uav_common.ros.qos import STREAM_QOS
-from uav_common.ros_processes import RosProcess, reserve_domain_id, ros2_run_argv, stop_all
+from uav_common.ros_domain import reserve_domain_id
+from uav_common.ros_processes import RosProcess, ros2_run_argv, stop_all
 from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.reporting.report import residual_update_period_s

@@ -9,9 +9,10 @@
 # a few seconds. A node ending on its own stops the others too (every simulator finishing
 # its scenario: exit status 0; any other node, or a failing simulator: 1).
 #
-# The nodes run on the domain of scripts/env.sh (the checkout's own id, or your
-# ROS_DOMAIN_ID), so `source scripts/env.sh; ros2 topic echo faults/estimate` in a second
-# shell sees them.
+# The nodes run on the ROS domain scripts/env.sh reserves (the one of the shell that starts
+# the script, or a free one; docs/ros_interface.md#ros-domains): a ROS_DOMAIN_ID another run
+# of the project holds ends the script, status 2. A second shell watches them with
+# `ROS_DOMAIN_ID=<the domain said> ros2 topic echo faults/estimate`.
 set -euo pipefail
 
 # Started with SIGINT ignored (as a background job of another script), bash could not trap
@@ -92,7 +93,7 @@ fi
 
 "$root/scripts/setup.sh"
 # shellcheck disable=SC1091
-source "$root/scripts/env.sh"
+source "$root/scripts/env.sh" || exit 2  # a held ROS_DOMAIN_ID: env.sh's one line
 mkdir -p "$logs"
 logs="$(cd "$logs" && pwd)"
 export ROS_LOG_DIR="$logs"
@@ -177,7 +178,7 @@ for key in "${!sources[@]}"; do  # a vehicle's nodes: uavk/<node>, or under --ns
     vehicle="${key%"${sources[$key]}"}"
     topic="${vehicle:+/$vehicle}faults/estimate"
     [ -z "$vehicle" ] && [ -n "$ns" ] && topic="${ns%/}/$topic"
-    echo "bringup.sh: running; watch with: source scripts/env.sh; ros2 topic echo $topic"
+    echo "bringup.sh: running; watch with: source scripts/env.sh; ROS_DOMAIN_ID=$ROS_DOMAIN_ID ros2 topic echo $topic"
 done
 if [ -n "$foxglove" ]; then
     echo "bringup.sh: live in Foxglove: open a connection to the address in $logs/foxglove_node.log (default ws://127.0.0.1:8765)"

@@ -1,7 +1,8 @@
 # Shell environment of the project, to be sourced: `source scripts/env.sh`.
 # Activates .venv, sources the colcon install space (which puts the project's `ros2`,
 # package ros2cli_lite, on PATH where no real ROS 2 is sourced), keeps DDS on loopback and
-# gives the shell a ROS domain of its own.
+# gives the shell a ROS domain of its own (docs/ros_interface.md#ros-domains). A
+# ROS_DOMAIN_ID another run of the project holds is refused: one line, status 1.
 # Run scripts/setup.sh first.
 
 _uav_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -11,6 +12,19 @@ if [ ! -f "$_uav_root/ros_ws/install/setup.bash" ]; then
     unset _uav_root
     return 1 2>/dev/null || exit 1
 fi
+
+# A ROS domain this shell holds for as long as it lives (the one it was given, unless
+# another run of the project holds that): uav_common.ros_domain, run from the checkout
+# (standard library only) before anything in the shell changes, so a refusal leaves it as
+# it was. The shell's PID is read here: inside $(...) BASHPID is the subshell's.
+_uav_shell_pid="${BASHPID:-$$}"
+if ! _uav_domain="$(PYTHONPATH="$_uav_root/ros_ws/src/uav_common" "$_uav_root/.venv/bin/python" \
+        -m uav_common.ros_domain --caller env.sh --pid "$_uav_shell_pid" \
+        --requested "${ROS_DOMAIN_ID:-}")"; then
+    unset _uav_root _uav_domain _uav_shell_pid
+    return 1 2>/dev/null || exit 1
+fi
+unset _uav_shell_pid
 
 # colcon's and the venv's scripts read unset variables: allow it while sourcing them.
 case $- in *u*) _uav_nounset=1; set +u ;; *) _uav_nounset= ;; esac
@@ -25,13 +39,9 @@ fi
 source "$_uav_root/ros_ws/install/setup.bash"
 if [ -n "$_uav_nounset" ]; then set -u; fi
 
-# No DDS traffic beyond loopback on these machines; a domain of this shell's own unless
-# the caller chose one (derived from the checkout's path, so two checkouts do not meet).
+# No DDS traffic beyond loopback on these machines.
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+export ROS_DOMAIN_ID="$_uav_domain"
 # Quicker discovery for short-lived tools (see the file); a user's own profile wins.
 export FASTRTPS_DEFAULT_PROFILES_FILE="${FASTRTPS_DEFAULT_PROFILES_FILE:-$_uav_root/config/fastdds.xml}"
-if [ -z "${ROS_DOMAIN_ID:-}" ]; then
-    ROS_DOMAIN_ID=$(( $(printf '%s' "$_uav_root" | cksum | cut -d' ' -f1) % 90 + 1 ))
-    export ROS_DOMAIN_ID
-fi
-unset _uav_root _uav_nounset
+unset _uav_root _uav_nounset _uav_domain

@@ -7,7 +7,6 @@ import os
 import shutil
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import IO
 
 import cloudpickle
 import helpers
@@ -17,7 +16,7 @@ from helpers.flight_cache import FlightCache
 from helpers.flights import fly
 from helpers.started_processes import started_processes
 from uav_common.ros.graph_probe import RosGraph
-from uav_common.ros_processes import reserve_domain_id
+from uav_common.ros_domain import DomainReservation, reserve_domain_id
 from uav_fault_estimator.campaigns.campaign import Campaign, CampaignOptions
 from uav_sim.scenario import Scenario, default_scenario_path, load_scenario
 from uav_sim.simulation import Sample
@@ -55,26 +54,26 @@ def user_configuration(tmp_path_factory: pytest.TempPathFactory) -> None:
 
 
 @pytest.fixture(scope="session")
-def domain_locks() -> Iterator[list[IO[str]]]:
-    """The lock of the domain id in use (ros_domain), released at the session's end."""
-    locks: list[IO[str]] = []
+def domain_reservations() -> Iterator[list[DomainReservation]]:
+    """The reservation of the domain id in use (ros_domain), let go at the session's end."""
+    reservations: list[DomainReservation] = []
     try:
-        yield locks
+        yield reservations
     finally:
-        for lock in locks:
-            lock.close()
+        for reservation in reservations:
+            reservation.close()
 
 
 @pytest.fixture(scope="module", autouse=True)
-def ros_domain(ros_logs: None, domain_locks: list[IO[str]]) -> int:
+def ros_domain(ros_logs: None, domain_reservations: list[DomainReservation]) -> int:
     """Each test module's ROS processes run on a domain id no other run holds and no
     earlier module of this session used last: an earlier module's endpoints (a killed
-    node's may linger) are never seen by a later one. The new id is locked before the
-    previous one is let go, so the two differ."""
-    domain_id, lock = reserve_domain_id()
-    for earlier in domain_locks:
+    node's may linger) are never seen by a later one. The new id is reserved before the
+    previous one is let go, so the two differ (uav_common.ros_domain)."""
+    domain_id, reservation = reserve_domain_id()
+    for earlier in domain_reservations:
         earlier.close()
-    domain_locks[:] = [lock]
+    domain_reservations[:] = [reservation]
     os.environ["ROS_DOMAIN_ID"] = str(domain_id)
     return domain_id
 

@@ -1,23 +1,19 @@
-"""Start ROS nodes and tools as processes the way a user would, and always stop them; a ROS
-domain id of a run's own. No rclpy here: the demo (demo_run.py) and the tests share this module.
+"""Start ROS nodes and tools as processes the way a user would, and always stop them. No
+rclpy here: the demo (demo_run.py) and the tests share this module; a run's ROS domain is
+uav_common.ros_domain's.
 """
 
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import os
 import signal
 import subprocess
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import IO
 
 STOP_TIMEOUT_S = 10.0
-# Fast DDS maps domain ids 0..101 to valid ports on Linux; leave 0 (the default) alone.
-DOMAIN_IDS = range(1, 102)
-LOCK_DIR = Path("/tmp")
 
 
 class RosProcess:
@@ -117,25 +113,6 @@ def wait_until(predicate: Callable[[], object], timeout_s: float, poll_s: float 
             return True
         time.sleep(poll_s)
     return bool(predicate())
-
-
-def reserve_domain_id() -> tuple[int, IO[str]]:
-    """Lock a free ROS domain id for this process: (id, open lock file to keep while in use),
-    so that parallel runs (test sessions, demos) never see each other.
-
-    The lock is released when the file is closed or the process ends, whatever the cause.
-    """
-    first = os.getpid() % len(DOMAIN_IDS)
-    for offset in range(len(DOMAIN_IDS)):
-        domain_id = DOMAIN_IDS[(first + offset) % len(DOMAIN_IDS)]
-        lock = open(LOCK_DIR / f"uav_fault_ros_domain_{domain_id}.lock", "w")  # noqa: SIM115
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            lock.close()
-            continue
-        return domain_id, lock
-    raise RuntimeError(f"every ROS domain id in {DOMAIN_IDS} is in use by another run")
 
 
 def exit_status_text(status: int) -> str:

@@ -64,12 +64,12 @@ from uav_aircraft.fdm import loaded_fuel_kg
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
 from uav_common.loopback import free_udp_port
 from uav_common.message_fields import stamp_seconds
+from uav_common.ros_domain import reserve_domain_id
 from uav_common.ros_processes import (
     NO_LOG_FILE_ROS_ARGS,
     RosProcess,
     exit_status_text,
     fast_flight_ros_args,
-    reserve_domain_id,
     ros2_run_argv,
     stop_all,
 )
