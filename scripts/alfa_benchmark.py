@@ -29,10 +29,11 @@ folds unless --no-peer.
 
 Prints, for the project's detector and then the peer, a line per flight, the table per
 failure kind and the summary, counted as ALFA's evaluator counts (a first alarm later than
-5 s after the onset is a miss) and at any delay; --json writes DESIGN.md's benchmark record
+5 s after the onset is a miss) and at any delay; --json writes the benchmark's record
 (`flights`, `summary` with the counts at any delay, the same within 5 s as `tp_5s`, ...,
-and `by_kind`; `peers`; the settings); --figures draws each flight as screen_logs.py does,
-with the onset and the 5 s after it marked. Exit status 0; 2 bad input (one line); 1 otherwise.
+and `by_kind`; `peers`; the settings: docs/design.md#the-alfa-benchmarks-record);
+--figures draws each flight as screen_logs.py does, with the onset and the 5 s after it
+marked. Exit status 0; 2 bad input (one line); 1 otherwise.
 """
 
 from __future__ import annotations

@@ -208,12 +208,12 @@ def figure_drawer(folder: Path | None, false_alarm_probability: float) -> Seen |
 
 
 def run_benchmark(request: AlfaBenchmarkRequest) -> dict[str, Any]:
-    """The benchmark's record (DESIGN.md's: `flights`, `summary`, `peers` and the settings),
-    printed as it goes (the project's detector, then the peer: a line per flight, the table
-    per kind, the summary within ALFA's 5 s and at any delay), written to
-    request.json_path unless it is None. BadInputError for a folder without ALFA flights,
-    flights that cannot be read, or a generator without samples to fit it on; OSError for
-    a figure or record that cannot be written."""
+    """The benchmark's record (`flights`, `summary`, `peers` and the settings:
+    docs/design.md#the-alfa-benchmarks-record), printed as it goes (the project's detector,
+    then the peer: a line per flight, the table per kind, the summary within ALFA's 5 s and
+    at any delay), written to request.json_path unless it is None. BadInputError for a
+    folder without ALFA flights, flights that cannot be read, or a generator without samples
+    to fit it on; OSError for a figure or record that cannot be written."""
     started = time.monotonic()
     options = request.campaign
     truths = alfa_paths(request.alfa_folder)

@@ -179,7 +179,7 @@ def summary_line(summary: dict[str, Any]) -> str:
 
 def limit_key(key: str, limit_s: float) -> str:
     """A summary key counted within limit_s [s]: `tp` -> `tp_5s`, `mean_delay_s` ->
-    `mean_delay_5s` (DESIGN.md's record)."""
+    `mean_delay_5s` (the benchmark record's names, docs/design.md#the-alfa-benchmarks-record)."""
     return f"{key.removesuffix('_s')}_{limit_s:g}s"
 
 
