@@ -80,6 +80,13 @@ def loaded_fuel_kg(vehicle: Vehicle, aircraft: FlownAircraft = NOMINAL) -> float
     return create_fdm(vehicle, aircraft=aircraft)[FUEL_LOADED_LBS] * KG_PER_LB
 
 
+def fuel_on_board_kg(given_kg: float, vehicle: Vehicle) -> float:
+    """The fuel on board [kg] where no log or link says it: given_kg where it is given (0 or
+    more), else (a negative value: vehicle_parameter.VEHICLE_FUEL_KG) what the vehicle's
+    model carries at the start of a flight (loaded_fuel_kg)."""
+    return given_kg if given_kg >= 0.0 else loaded_fuel_kg(vehicle)
+
+
 def set_faults(fdm: jsbsim.FGFDMExec, faults_pct: dict[str, float]) -> None:
     """Seed faults [%] by name into the aircraft's fault properties."""
     for name, value_pct in faults_pct.items():
