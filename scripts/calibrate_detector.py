@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Calibrate detector_node from fault-free flights (Blanke & Hansen, section II-III).
 
-    python scripts/calibrate_detector.py [--vehicle aerosonde] [--flights 12] [--bags BAG ...]
+    python scripts/calibrate_detector.py [--vehicle NAME] [--flights 12] [--bags BAG ...]
                                          [--out FILE]
 
 Flies the vehicle's fault-free scenario (its default flight: turbulence from the wind, noisy
@@ -15,7 +15,12 @@ factor, window and settling time it was made with (detection.calibration's defau
 which alone it holds: detector_node runs it with them.
 Held-out flights for the false-alarm test use seeds from 201 (tests/detector). --bags
 calibrates from recordings of fault-free flights instead (recorder_node's or demo.sh's bag/
-folders: their /state and /controls).
+folders: their /state and /controls), of the vehicle they say flew (their simulator's or
+link's /diagnostics: recording.project_bag.recorded_vehicle; --vehicle for those that do not
+say).
+
+Exit status: 0 written; 1 the calibration failed; 2 a bad argument, or recordings of another
+vehicle than --vehicle or of several (one line).
 """
 
 from __future__ import annotations
@@ -26,7 +31,13 @@ import time
 from pathlib import Path
 
 from uav_aircraft.paths import calibration_output_path
-from uav_aircraft.vehicles import DEFAULT_VEHICLE, DETECTOR_CALIBRATION_FILE, vehicle_names
+from uav_aircraft.vehicles import (
+    DEFAULT_VEHICLE,
+    DETECTOR_CALIBRATION_FILE,
+    VehicleError,
+    vehicle_names,
+    vehicle_of_sources,
+)
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     CampaignOptions,
@@ -48,7 +59,12 @@ from uav_fault_estimator.detection.calibration import (
 from uav_fault_estimator.detection.calibration_file import calibration_to_dict
 from uav_fault_estimator.detection.calibration_fit import calibrate
 from uav_fault_estimator.detection.generators import SHIPPED_GENERATORS, generator_names
-from uav_fault_estimator.recording.project_bag import flight_from_recording, project_typestore
+from uav_fault_estimator.recording.project_bag import (
+    RecordingError,
+    flight_from_recording,
+    project_typestore,
+    recorded_vehicle,
+)
 from uav_fault_estimator.reporting.calibration_output import write_calibration
 
 
@@ -73,10 +89,20 @@ def recorded(bags: list[Path]) -> tuple[list, str]:
     return flights, header
 
 
+def recordings_vehicle(bags: list[Path], given: str | None) -> str:
+    """The vehicle the recordings say flew (vehicle_of_sources: given where none says);
+    VehicleError or RecordingError, one line, otherwise."""
+    typestore = project_typestore()
+    return vehicle_of_sources({str(bag): recorded_vehicle(bag, typestore) for bag in bags},
+                              given, say=lambda line: print(f"calibrate_detector.py: {line}"))
+
+
 @exit_on_failed_tasks
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE)
+    parser.add_argument("--vehicle", choices=vehicle_names(),
+                        help=f"the aircraft (default: the one the --bags say flew, else "
+                        f"{DEFAULT_VEHICLE}); refused where the --bags say another")
     parser.add_argument("--flights", type=int, default=CALIBRATION_FLIGHTS)
     parser.add_argument("--bags", type=Path, nargs="+",
                         help="recordings of fault-free flights to calibrate from, not flying")
@@ -87,13 +113,19 @@ def main() -> int:
                              + ",".join(SHIPPED_GENERATORS) + ")")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
-    out = arguments.out or calibration_output_path(arguments.vehicle, DETECTOR_CALIBRATION_FILE)
+    try:
+        vehicle = (recordings_vehicle(arguments.bags, arguments.vehicle) if arguments.bags
+                   else arguments.vehicle or DEFAULT_VEHICLE)
+    except (VehicleError, RecordingError) as error:
+        print(f"calibrate_detector.py: {error}", file=sys.stderr)
+        return 2
+    out = arguments.out or calibration_output_path(vehicle, DETECTOR_CALIBRATION_FILE)
     started = time.monotonic()
     try:
         flights, header = (recorded(arguments.bags) if arguments.bags
-                           else simulated(arguments.flights, arguments.vehicle,
+                           else simulated(arguments.flights, vehicle,
                                           campaign_options(arguments)))
-        calibration = calibrate(flights, airframe=simulated_airframe(arguments.vehicle),
+        calibration = calibrate(flights, airframe=simulated_airframe(vehicle),
                                 generators=arguments.generators)
     except (ValueError, FileNotFoundError) as error:
         print(f"calibrate_detector.py: {error}", file=sys.stderr)

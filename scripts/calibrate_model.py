@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Calibrate the prediction model from recordings of fault-free flights.
 
-    python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--vehicle aerosonde]
+    python scripts/calibrate_model.py RECORDING... --out MODEL.yaml [--vehicle NAME]
         [--parameters A,B,...] [--measured AIRCRAFT.yaml] [--strict]
         [--airframe FILE] [--fuel-mass-kg KG]
 
@@ -12,7 +12,10 @@ aircraft folder's calibration_plan/: system-identification manoeuvres). Or the a
 own log of such a flight: an ArduPilot DataFlash log (.bin) or a PX4 ULog (.ulg)
 (flight_logs/calibration_logs.py: which message gives which column), its PWM outputs mapped
 to the surfaces by the airframe FILE (default: the vehicle's only airframe file), with the
-fuel mass KG on board (no autopilot logs it; default 0, an electric aircraft). Identifies the
+fuel mass KG on board (no autopilot logs it; default: what the vehicle's model carries).
+The vehicle is the one the recordings say flew (their simulator's or link's /diagnostics:
+recording.project_bag.recorded_vehicle); --vehicle names it for those that do not say
+(autopilot logs; default aerosonde), and one that disagrees with them is refused. Identifies the
 model's parameters (default: model_parameters.DEFAULT_PARAMETERS; any aerodynamic
 coefficient of the vehicle's XML by name or all of them as `coefficients`, mass_scale,
 thrust_scale, inertia_{x,y,z}_scale, cg_{x,y,z}_cm, airspeed_scale, angle_of_attack_deg,
@@ -22,12 +25,13 @@ that inform it, and the pairs the flights cannot separate with the manoeuvres th
 (estimation/identifiability.py); then checks the fit (estimation/calibration_check.py: the
 weighted residual, parameters pushed beyond two prior deviations, a residual channel with a
 structured remainder in a flight regime) and prints a WARN line for each finding, naming
-what it suggests; and writes MODEL.yaml for residual_node's model_calibration_file (demo.sh
+what it suggests; writes MODEL.yaml for residual_node's model_calibration_file (demo.sh
 --model-calibration MODEL.yaml) and, beside it, MODEL.noise.yaml: the residual noise of the
 calibrated model on the same flights, per sensor suite (a suite none of them flew, such as
 the air data of logs without vanes, the shipped one's), for mhe_node's
 noise_calibration_file (calibrate_estimator.py's file, made from these flights instead of
-simulated ones; MODEL.yaml names it, and demo.sh passes both).
+simulated ones; MODEL.yaml names it, and demo.sh passes both); and ends with a line saying
+whether the check passed.
 
 AIRCRAFT.yaml: what was measured of the aircraft on the ground, as a scenario's `aircraft:`
 block under the key `aircraft` (say cg_offset_m from a balance, inertia_scale from a
@@ -35,8 +39,9 @@ pendulum): the fit starts from it and holds what it does not fit there. The flig
 tell the CG along x and z or the inertias from the coefficients (docs/model_calibration.md),
 and a fault's signature depends on them: measure them where you can.
 
-Exit status: 0 written; 1 the least squares did not solve, or --strict and the check warned
-(nothing written); 2 a bad argument or recording (one line each).
+Exit status: 0 written, the check passed; 1 the least squares did not solve, or --strict and
+the check warned (nothing written); 2 a bad argument or recording, or recordings of another
+vehicle than --vehicle or of several (one line each); 3 written, but the check warned.
 """
 
 from __future__ import annotations
@@ -49,8 +54,10 @@ from pathlib import Path
 
 import numpy as np
 from uav_aircraft.airframe import load_airframe
+from uav_aircraft.fdm import fuel_on_board_kg
 from uav_aircraft.flown_aircraft import NOMINAL
-from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
+from uav_aircraft.vehicle_parameter import VEHICLE_FUEL_KG
+from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names, vehicle_of_sources
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
@@ -79,11 +86,13 @@ from uav_fault_estimator.flight_logs.calibration_logs import LOG_SUFFIXES, senso
 from uav_fault_estimator.recording.project_bag import (
     RecordingError,
     project_typestore,
+    recorded_vehicle,
     sensor_flight_from_recording,
 )
 from uav_fault_estimator.reporting.calibration_output import write_calibration
 
 INSEPARABLE = 0.9  # |posterior correlation| from which a pair is said to be hard to separate
+EXIT_CHECK_WARNED = 3  # written, but the fit's check warned
 
 
 @exit_on_failed_tasks
@@ -91,8 +100,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("recordings", nargs="+", type=Path, metavar="RECORDING")
     parser.add_argument("--out", type=Path, required=True, metavar="MODEL.yaml")
-    parser.add_argument("--vehicle", choices=vehicle_names(), default=DEFAULT_VEHICLE,
-                        help="the aircraft flown (default: %(default)s)")
+    parser.add_argument("--vehicle", choices=vehicle_names(),
+                        help="the aircraft flown, where the recordings do not say it "
+                        f"(default: {DEFAULT_VEHICLE}); refused where they say another")
     parser.add_argument("--parameters", default=",".join(DEFAULT_PARAMETERS),
                         help="comma-separated names (default: %(default)s)")
     parser.add_argument("--measured", type=Path, metavar="AIRCRAFT.yaml",
@@ -102,18 +112,20 @@ def main() -> int:
     parser.add_argument("--airframe", type=Path, metavar="FILE",
                         help="the servo mapping of the logs' outputs (default: the vehicle's "
                         "only airframe file)")
-    parser.add_argument("--fuel-mass-kg", type=float, default=0.0, metavar="KG",
-                        help="the fuel on board during the logs' flights (default: %(default)s)")
+    parser.add_argument("--fuel-mass-kg", type=float, default=VEHICLE_FUEL_KG, metavar="KG",
+                        help="the fuel on board during the logs' flights (default: what the "
+                        "vehicle's model carries)")
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
     try:
-        vehicle = arguments.vehicle
+        vehicle = vehicle_of_sources(_said_vehicles(arguments.recordings), arguments.vehicle,
+                                     say=lambda line: print(f"calibrate_model.py: {line}"))
         names = parameter_list(arguments.parameters, load_vehicle(vehicle))
         measured = (load_measured_aircraft(arguments.measured, vehicle) if arguments.measured
                     else NOMINAL)
         flights = _load_flights(arguments.recordings, vehicle, arguments.airframe,
-                                arguments.fuel_mass_kg)
+                                fuel_on_board_kg(arguments.fuel_mass_kg, load_vehicle(vehicle)))
     except (ValueError, RecordingError) as error:
         print(f"calibrate_model.py: {error}", file=sys.stderr)
         return 2
@@ -133,7 +145,6 @@ def main() -> int:
     warnings = check_calibration(calibration, flights, noise)
     for warning in warnings:
         print(f"WARN {warning.text}")
-    print(f"check: {len(warnings)} warnings" if warnings else "check: the model fits the flights")
     if warnings and arguments.strict:
         print(f"calibrate_model.py: --strict and {len(warnings)} warnings of the fit's check: "
               f"{arguments.out} not written", file=sys.stderr)
@@ -150,7 +161,27 @@ def main() -> int:
                       calibration_dict(calibration, vehicle, [f.name for f in flights],
                                        noise_path.name),
                       f"{len(flights)} flights", time.monotonic() - started)
+    written = f"{arguments.out} and {noise_path.name}"
+    if warnings:
+        print(f"check failed: {len(warnings)} warnings (the WARN lines above); {written} "
+              "written all the same: read the warnings before flying the model")
+        return EXIT_CHECK_WARNED
+    print(f"check passed: the model fits the flights; {written} written")
     return 0
+
+
+def _said_vehicles(recordings: list[Path]) -> dict[str, str | None]:
+    """The vehicle each recording says flew (recorded_vehicle; None for an autopilot's log,
+    which does not say, and for a recording that cannot be read: its loading says why)."""
+    typestore = project_typestore()
+    said = {}
+    for path in recordings:
+        try:
+            said[str(path)] = (None if path.suffix.lower() in LOG_SUFFIXES
+                               else recorded_vehicle(path, typestore))
+        except RecordingError:
+            said[str(path)] = None
+    return said
 
 
 def _load_flights(recordings: list[Path], vehicle: str, airframe: Path | None,

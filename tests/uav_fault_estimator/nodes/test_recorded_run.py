@@ -1,6 +1,7 @@
 """The main job's chain on a short flight: sim_node, residual_node, mhe_node and
-recorder_node as processes, then metrics.json's figures from the recording alone, and the
-detector's calibration from it (calibrate_detector.py --bags)."""
+recorder_node as processes, then metrics.json's figures from the recording alone, the vehicle
+that flew (sim_node's /diagnostics), and the detector's calibration from it
+(calibrate_detector.py --bags)."""
 
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ from uav_fault_estimator.recording.project_bag import (
     flight_from_recording,
     project_typestore,
     read_topics,
+    recorded_vehicle,
 )
 from uav_fault_estimator.reporting import figures, report
 from uav_fault_msgs.msg import FaultEstimate
@@ -84,6 +86,7 @@ def test_a_recorded_flight_gives_its_metrics(short_scenario, start_process, tmp_
     assert lift["estimate_final_pct"] == pytest.approx(10.0, abs=1.0)  # 45 s after the step
     assert lift["detection_delay_s"] is not None and lift["detection_delay_s"] <= 10.0
     assert metrics["false_alarms"] == [] and metrics["solver"]["failures"] == 0
+    assert recorded_vehicle(bag, typestore) == "aerosonde"  # the scenario's
 
     # the detector's calibration from the recording: the same flight as the core flies it
     recorded = flight_from_recording(bag, typestore, 0.2)

@@ -26,6 +26,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
@@ -183,6 +184,34 @@ def check_vehicle_name(name: str) -> str:
     if name not in known:
         raise VehicleError(f"unknown vehicle {name!r} (known: {', '.join(known)})")
     return name
+
+
+def vehicle_of_sources(said: Mapping[str, str | None], given: str | None,
+                       given_as: str = "--vehicle",
+                       say: Callable[[str], None] = lambda line: None) -> str:
+    """The vehicle that flew what a command reads (recordings, logs): the one the sources
+    say (said: each source's name -> the vehicle it says flew, None where it says none),
+    else given, else DEFAULT_VEHICLE (and say(line) tells so). VehicleError, one line, when
+    the sources name different vehicles, or given (the option given_as) names another than
+    they say."""
+    sources_of: dict[str, list[str]] = {}
+    for source, vehicle in said.items():
+        if vehicle is not None:
+            sources_of.setdefault(vehicle, []).append(source)
+    if len(sources_of) > 1:
+        raise VehicleError("different vehicles flew these: " + "; ".join(
+            f"{vehicle} {', '.join(sources)}" for vehicle, sources in sorted(sources_of.items()))
+            + ": give one vehicle's at a time")
+    if not sources_of:
+        vehicle = check_vehicle_name(given or DEFAULT_VEHICLE)
+        say(f"{', '.join(said)}: no vehicle said; taken as {vehicle}"
+            + ("" if given else f" (the default; {given_as} NAME if another flew)"))
+        return vehicle
+    (vehicle, sources), = sources_of.items()
+    if given is not None and given != vehicle:
+        raise VehicleError(f"{given_as} {given}, but {vehicle} flew {', '.join(sources)}: "
+                           f"leave out {given_as} or give {vehicle}")
+    return check_vehicle_name(vehicle)
 
 
 @functools.cache

@@ -21,6 +21,7 @@ from rosbags.rosbag2 import Reader, ReaderError, StoragePlugin, Writer
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
+from uav_common.health import VEHICLE_KEY, hardware_id
 from uav_common.message_fields import (
     air_data_array,
     controls_array,
@@ -38,6 +39,7 @@ from uav_fault_estimator.detection.generators import NO_SETPOINTS
 from uav_fault_estimator.estimation.model_calibration import SensorFlight
 
 MESSAGE_PACKAGES = ("uav_fault_msgs",)  # the project's own message types
+DIAGNOSTICS = "/diagnostics"  # every node's health: the vehicle a recording flew among it
 
 
 def project_typestore(message_packages: Sequence[str] = MESSAGE_PACKAGES) -> Typestore:
@@ -160,6 +162,20 @@ def wall_span_s(bag: Path, topics: tuple[str, ...], received_ns: list[int]) -> f
         if spans:
             return 1e-9 * (max(last for _, last in spans) - min(first for first, _ in spans))
     return 1e-9 * (max(received_ns) - min(received_ns)) if received_ns else 0.0
+
+
+def recorded_vehicle(bag: Path, typestore: Typestore) -> str | None:
+    """The vehicle a recording says flew: what its aircraft's source (sim_node, mavlink_node)
+    said on /diagnostics (uav_common.health.VEHICLE_KEY) in the recording's root namespace;
+    None where none said it. RecordingError (one line naming the recording) when it cannot
+    be read, or when two vehicles are said."""
+    said = {item.value for array in read_topics(bag, typestore, (DIAGNOSTICS,))[DIAGNOSTICS]
+            for status in array.status if status.hardware_id == hardware_id("")
+            for item in status.values if item.key == VEHICLE_KEY}
+    if len(said) > 1:
+        raise RecordingError(f"recording {bag}: its /diagnostics say that "
+                             f"{' and '.join(sorted(said))} flew")
+    return said.pop() if said else None
 
 
 def flight_from_recording(bag: Path, typestore: Typestore, period_s: float) -> DetectorFlight:

@@ -9,10 +9,11 @@ nodes with use_sim_time) and `/diagnostics`. Run with use_sim_time, it follows t
 `/clock` instead of publishing it (a second vehicle in the same domain): each step waits
 until the clock has reached its time, so every vehicle flies on the one clock. Measurements
 go through the sensor model (uav_sim.sensors) unless the scenario says `sensors: {noise:
-false}`. Its /diagnostics say how the flown aircraft differs from the model
-(`flown_aircraft`: JSON of the scenario's aircraft block where it differs, {} for the model
-itself), so that a recording keeps what was flown. Ends by itself at the scenario's end, with
-exit status 0; a bad scenario or parameter ends it before it starts, status 2.
+false}`. Its /diagnostics say which vehicle flies (`vehicle`) and how the flown aircraft
+differs from the model (`flown_aircraft`: JSON of the scenario's aircraft block where it
+differs, {} for the model itself), so that a recording keeps what was flown. Ends by itself
+at the scenario's end, with exit status 0; a bad scenario or parameter ends it before it
+starts, status 2.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from rosgraph_msgs.msg import Clock
 from uav_aircraft.flown_aircraft import DIAGNOSTIC_KEY
 from uav_aircraft.vehicles import vehicle_names
 from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES, STATE_CHANNELS
-from uav_common.health import GUIDANCE_FALLBACKS_KEY, GUIDANCE_KEY
+from uav_common.health import GUIDANCE_FALLBACKS_KEY, GUIDANCE_KEY, VEHICLE_KEY
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
@@ -218,6 +219,7 @@ class SimNode(Node):
             "sim_time_s": f"{sample.time_s:.2f}",
             "real_time_factor": f"{sample.time_s / wall_s:.1f}" if wall_s > 0 else "-",
             "scenario": self.scenario.name,
+            VEHICLE_KEY: self.scenario.vehicle,
             DIAGNOSTIC_KEY: self.flown_aircraft,
             "missing_channels": ",".join(missing) or "none",
             GUIDANCE_KEY: self.scenario.guidance.method,
