@@ -40,7 +40,10 @@ usage: scripts/bringup.sh [--ns NS] [--params FILE] [--scenario FILE] [--logs DI
                    the aircraft's autopilot instead of sim_node: mavlink_node listens on
                    CONNECTION (udpin:127.0.0.1:14550, /dev/ttyACM0,921600, ...; docs/onboard.md)
                    and publishes /clock; no --scenario
-  --vehicle NAME   with --mavlink: the aircraft the nodes model (default: aerosonde)
+  --vehicle NAME   with --mavlink: the aircraft the nodes model (default: aerosonde);
+                   mavlink_node carries its model's fuel unless --params sets fuel_mass_kg.
+                   A flight log played to the link: --params from log_streamer LOG
+                   --write-params FILE (the log's maximum ages; docs/onboard.md)
 EOF
 }
 

@@ -2,6 +2,8 @@
 
     ros2 run uav_mavlink log_streamer LOG [--connection udpout:127.0.0.1:14550] [--speed N]
     python -m uav_mavlink.log_streamer LOG [--connection ...] [--speed N] [--system ID]
+    ros2 run uav_mavlink log_streamer LOG --write-params FILE [--airframe AIRFRAME.yaml]
+        [--detector-calibration CAL.yaml]
 
 LOG is an ALFA flight folder (per-topic CSV files) or a PX4 .ulg; its messages are
 log_messages' (ATTITUDE, SERVO_OUTPUT_RAW, VFR_HUD, ... and a heartbeat each second), sent
@@ -16,25 +18,61 @@ The connection is pymavlink's (udpout:HOST:PORT, tcp:HOST:PORT, ...). Only a hos
 machine (127.0.0.0/8, ::1, localhost) is taken unless --beyond-loopback is given: a log
 played to a real link would pose as an aircraft to whatever listens there.
 
-Exit status: 0 played to its end; 2 bad input, one line (a log that cannot be read, a
-connection beyond loopback, a speed not above 0, a connection that cannot be opened).
+The log's rates: the link interpolates a stream over gaps of at most its maximum age
+(mavlink_node's `*_max_age_s`), which suits an autopilot at the onboard page's advised
+rates; a log streamed slower (ALFA's ATTITUDE, from MAVROS's imu/data, at about 2.5 Hz)
+needs them raised, or its samples go missing. The first line printed says which parameters this log
+needs (link_max_ages_s: GAP_FACTOR times each message's median interval, as screen_logs.py's
+resampling bridges a log's gaps, rounded up to 0.1 s; those above mavlink_node's defaults),
+or that the defaults hold. --write-params FILE writes them as a ROS parameter file instead
+of playing (for scripts/bringup.sh --params FILE, or the nodes' --params-file), with
+--airframe the servo map mavlink_node reads the log's outputs with and the airframe
+detector_node holds its calibration to, and with --detector-calibration that calibration
+(checked against the airframe): what the chain needs to run the log, in one file.
+
+Exit status: 0 played to its end, or the parameter file written; 2 bad input, one line (a
+log that cannot be read, a connection beyond loopback, a speed not above 0, a connection
+that cannot be opened, an airframe or calibration that cannot be used, a parameter file
+that cannot be written).
 """
 
 from __future__ import annotations
 
 import argparse
 import ipaddress
+import itertools
+import math
 import os
+import statistics
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+import yaml
+from uav_aircraft.airframe import load_airframe
+from uav_common.interpolation import GAP_FACTOR
+from uav_fault_estimator.detection.calibration_file import read_calibration
 
 os.environ.setdefault("MAVLINK20", "1")  # pymavlink reads it at its import
 
 from pymavlink import mavutil
 
+from uav_mavlink.autopilot_messages import (
+    AIRSPEED,
+    ATTITUDE,
+    ENGINE,
+    OUTPUTS,
+    POSITION,
+    RATES,
+    RATES_2,
+    SETPOINTS,
+    VELOCITY,
+    VELOCITY_SETPOINT,
+    WIND,
+    read_message,
+)
 from uav_mavlink.link import DIALECT
 from uav_mavlink.log_messages import TimedMessage, log_messages
 
@@ -43,6 +81,16 @@ DEFAULT_CONNECTION = "udpout:127.0.0.1:14550"
 AUTOPILOT_COMPONENT = mavutil.mavlink.MAV_COMP_ID_AUTOPILOT1  # 1
 _NETWORK_PREFIXES = ("udpout:", "udpin:", "udp:", "udpbcast:", "tcp:", "tcpin:", "mcast:",
                      "ws:", "wss:", "wsserver:")
+# The mavlink_node parameter that bounds the gaps of each stream interpolated over (or, for
+# the held streams, how long its last reading is held): its SampleAssembly's max ages.
+MAX_AGE_PARAMETERS = {
+    ATTITUDE: "attitude_max_age_s", RATES: "attitude_max_age_s",
+    RATES_2: "attitude_max_age_s", POSITION: "position_max_age_s",
+    VELOCITY: "position_max_age_s", AIRSPEED: "air_data_max_age_s",
+    OUTPUTS: "outputs_max_age_s", SETPOINTS: "slow_max_age_s",
+    VELOCITY_SETPOINT: "slow_max_age_s", WIND: "slow_max_age_s", ENGINE: "slow_max_age_s"}
+AGE_STEP_S = 0.1  # the advised maximum ages are rounded up to this [s]
+LISTENER, DETECTOR = "mavlink_node", "detector_node"
 
 
 def on_loopback(connection: str) -> bool:
@@ -77,6 +125,91 @@ def play(messages: Sequence[TimedMessage], send: Callable[[Any], None], speed: f
     return len(messages)
 
 
+def message_intervals_s(messages: Sequence[TimedMessage]) -> dict[str, float]:
+    """The median interval between consecutive messages of each type the link reads
+    (autopilot_messages.read_message), by MAVLink message type [s]; a type sent once: not
+    given."""
+    times: dict[str, list[float]] = {}
+    for timed in messages:
+        if read_message(timed.message) is not None:
+            times.setdefault(timed.message.get_type(), []).append(timed.boot_time_s)
+    return {kind: statistics.median(b - a for a, b in itertools.pairwise(sent))
+            for kind, sent in times.items() if len(sent) > 1}
+
+
+def link_max_ages_s(messages: Sequence[TimedMessage]) -> dict[str, tuple[float, str]]:
+    """The maximum age each of mavlink_node's *_max_age_s parameters needs for these
+    messages' rates [s], and the message that needs it: per parameter, GAP_FACTOR times the
+    longest median interval of the messages of its streams (MAX_AGE_PARAMETERS), rounded
+    up to AGE_STEP_S."""
+    stream_of = {timed.message.get_type(): reading.stream for timed in messages
+                 if (reading := read_message(timed.message)) is not None}
+    needed: dict[str, tuple[float, str]] = {}
+    for kind, interval_s in sorted(message_intervals_s(messages).items()):
+        parameter = MAX_AGE_PARAMETERS[stream_of[kind]]
+        age_s = round(math.ceil(round(GAP_FACTOR * interval_s / AGE_STEP_S, 6)) * AGE_STEP_S, 6)
+        if parameter not in needed or age_s > needed[parameter][0]:
+            needed[parameter] = (age_s, kind)
+    return needed
+
+
+def raised_max_ages_s(needed: Mapping[str, tuple[float, str]],
+                      defaults_s: Mapping[str, float]) -> dict[str, tuple[float, str]]:
+    """Those of the needed maximum ages (link_max_ages_s) above mavlink_node's defaults."""
+    return {parameter: (age_s, kind) for parameter, (age_s, kind) in sorted(needed.items())
+            if age_s > defaults_s[parameter]}
+
+
+def rates_line(raised: Mapping[str, tuple[float, str]],
+               intervals_s: Mapping[str, float]) -> str:
+    """One line on the log's rates: the mavlink_node parameters they need, or that its
+    defaults hold."""
+    if not raised:
+        return "this log's rates: mavlink_node's default maximum ages hold"
+    slow = ", ".join(f"{kind} {1.0 / intervals_s[kind]:.1f} Hz"
+                     for kind in sorted({kind for _, kind in raised.values()}))
+    return (f"this log's rates ({slow}) need mavlink_node --ros-args "
+            + " ".join(f"-p {parameter}:={age_s!r}" for parameter, (age_s, _) in raised.items())
+            + " (or in a parameter file: --write-params FILE)")
+
+
+def chain_parameters(raised: Mapping[str, tuple[float, str]], airframe: Path | None,
+                     calibration: Path | None) -> dict[str, Any]:
+    """A ROS parameter file's mapping: mavlink_node's raised maximum ages; given an airframe,
+    mavlink_node's servo map and the airframe detector_node checks its calibration against
+    (its name: the vehicle's own calibration, of its simulated airframe, is then refused at
+    start instead of run on the log); given a calibration, detector_node's. ValueError (one
+    line) for an airframe or calibration that cannot be used, or a calibration without its
+    airframe."""
+    listener: dict[str, Any] = {parameter: age_s for parameter, (age_s, _) in raised.items()}
+    nodes: dict[str, Any] = {LISTENER: {"ros__parameters": listener}}
+    if calibration is not None and airframe is None:
+        raise ValueError("--detector-calibration needs the --airframe it was made for")
+    if airframe is not None:
+        listener["airframe"] = str(airframe.resolve())
+        detector = {"airframe": load_airframe(airframe).name}
+        if calibration is not None:
+            read_calibration(str(calibration), detector["airframe"])
+            detector["calibration_file"] = str(calibration.resolve())
+        nodes[DETECTOR] = {"ros__parameters": detector}
+    return nodes
+
+
+def write_parameters(path: Path, log: Path, nodes: Mapping[str, Any], line: str) -> None:
+    """The ROS parameter file at path, its first lines saying what it is for."""
+    path.write_text(f"# Written by log_streamer for {log}:\n# {line}\n"
+                    "# For scripts/bringup.sh --params FILE, or a node's --params-file FILE.\n"
+                    + yaml.safe_dump(dict(nodes), sort_keys=False))
+
+
+def listener_defaults_s() -> dict[str, float]:
+    """mavlink_node's default maximum ages [s], from its parameters (their one home)."""
+    from uav_mavlink.ros.mavlink_node import PARAMETERS  # rclpy: the command's alone
+
+    return {parameter: float(PARAMETERS[parameter].default)
+            for parameter in set(MAX_AGE_PARAMETERS.values())}
+
+
 def parser() -> argparse.ArgumentParser:
     """The command line (the module's docstring)."""
     arguments = argparse.ArgumentParser(prog=PROGRAM, description=__doc__.splitlines()[0])
@@ -89,6 +222,15 @@ def parser() -> argparse.ArgumentParser:
                            help="the autopilot's MAVLink system id (default 1)")
     arguments.add_argument("--beyond-loopback", action="store_true",
                            help="allow a connection to another machine or a serial port")
+    arguments.add_argument("--write-params", type=Path, metavar="FILE",
+                           help="write the ROS parameters the chain needs for this log "
+                           "(mavlink_node's maximum ages) to FILE instead of playing it")
+    arguments.add_argument("--airframe", type=Path, metavar="AIRFRAME.yaml",
+                           help="with --write-params: mavlink_node's servo map of the log's "
+                           "outputs, and the airframe detector_node's calibration must be of")
+    arguments.add_argument("--detector-calibration", type=Path, metavar="CAL.yaml",
+                           help="with --write-params: detector_node's calibration (made for "
+                           "--airframe)")
     return arguments
 
 
@@ -99,10 +241,17 @@ def main(argv: list[str] | None = None) -> int:
     if not arguments.beyond_loopback and not on_loopback(arguments.connection):
         return _bad(f"--connection {arguments.connection}: not on this machine's loopback; "
                     "give --beyond-loopback to send a recorded flight there")
+    if (arguments.airframe or arguments.detector_calibration) and not arguments.write_params:
+        return _bad("--airframe and --detector-calibration go with --write-params FILE")
     try:
         messages = log_messages(arguments.log)
     except ValueError as error:
         return _bad(str(error))
+    raised = raised_max_ages_s(link_max_ages_s(messages), listener_defaults_s())
+    line = rates_line(raised, message_intervals_s(messages))
+    print(line, flush=True)
+    if arguments.write_params:
+        return _write_params(arguments, raised, line)
     try:
         link = mavutil.mavlink_connection(arguments.connection, source_system=arguments.system,
                                           source_component=AUTOPILOT_COMPONENT,
@@ -117,6 +266,22 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         link.close()
     print(f"sent {sent} messages", flush=True)
+    return 0
+
+
+def _write_params(arguments: argparse.Namespace, raised: Mapping[str, tuple[float, str]],
+                  line: str) -> int:
+    """--write-params: the parameter file of the raised maximum ages (and the airframe and
+    calibration given) written, status 0; or one line why not, status 2."""
+    try:
+        nodes = chain_parameters(raised, arguments.airframe, arguments.detector_calibration)
+        write_parameters(arguments.write_params, arguments.log, nodes, line)
+    except ValueError as error:
+        return _bad(str(error))
+    except OSError as error:
+        return _bad(f"--write-params {arguments.write_params}: cannot be written "
+                    f"({error.strerror})")
+    print(f"written: {arguments.write_params}", flush=True)
     return 0
 
 
