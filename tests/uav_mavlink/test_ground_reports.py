@@ -75,7 +75,7 @@ def test_the_tests_raising_an_alarm_are_named_from_the_alarm_message():
 
 
 def test_an_alarm_is_one_onset_and_one_end_however_it_flickers():
-    texts = GroundTexts(min_interval_s=1.0, alarm_end_hold_s=3.0)
+    texts = GroundTexts(min_interval_s=1.0, hold_s=3.0)
     flickers = [(10.0 + 0.2 * k, k % 3 != 2) for k in range(50)]  # on, on, off, ...
     for flight_s, on in [(9.8, False), *flickers]:
         texts.alarm(flight_s, on, "elevator", ("fast",))
@@ -85,35 +85,36 @@ def test_an_alarm_is_one_onset_and_one_end_however_it_flickers():
                                  (END_SEVERITY, "UAV FDI alarm over: elevator, 10 s")]
 
 
-def test_an_estimate_crossing_is_said_once_each_way_with_its_value():
-    texts = GroundTexts(min_interval_s=5.0, alarm_end_hold_s=3.0)
+def test_an_estimate_hovering_at_the_threshold_is_one_over_and_one_under():
+    texts = GroundTexts(min_interval_s=5.0, hold_s=3.0)
     names = PAPER_FAULT_NAMES[:2]
-    texts.estimates(names, [BELOW, BELOW])
+    texts.estimates(0.0, names, [BELOW, BELOW])
     assert texts.due(0.0) is None
-    texts.estimates(names, [OVER, BELOW])
-    for t in range(2, 30):
-        texts.estimates(names, [OVER + t, BELOW])
-    assert drain(texts, 1.0) == [(ALARM_SEVERITY, "UAV FDI: rw_lift 3.0% over 2%")]
-    texts.estimates(names, [BELOW, BELOW])
-    assert drain(texts, 10.0) == [(END_SEVERITY, "UAV FDI: rw_lift 1.5% under 2%")]
+    for k in range(100):  # 1.99, 2.01, 1.99, ... from 1 s to 21 s
+        value = DETECTION_THRESHOLD_PCT + (0.01 if k % 2 else -0.01)
+        texts.estimates(1.0 + 0.2 * k, names, [max(value, OVER) if k == 1 else value, BELOW])
+    assert drain(texts, 1.0) == [(ALARM_SEVERITY, "UAV FDI: rw_lift 3.00% over 2%")]
+    for k in range(20):  # under from 21 s
+        texts.estimates(21.0 + 0.2 * k, names, [1.994, BELOW])
+    assert drain(texts, 10.0) == [(END_SEVERITY, "UAV FDI: rw_lift 1.99% under 2%")]
 
 
 def test_texts_wait_their_turn_in_order_and_a_crossing_undone_meanwhile_is_withdrawn():
-    texts = GroundTexts(min_interval_s=5.0, alarm_end_hold_s=3.0)
+    texts = GroundTexts(min_interval_s=5.0, hold_s=0.0)
     names = PAPER_FAULT_NAMES
-    texts.estimates(names, [OVER, BELOW, BELOW, BELOW])
-    assert texts.due(0.0).text == "UAV FDI: rw_lift 3.0% over 2%"
-    texts.estimates(names, [OVER, OVER, OVER, BELOW])
+    texts.estimates(0.0, names, [OVER, BELOW, BELOW, BELOW])
+    assert texts.due(0.0).text == "UAV FDI: rw_lift 3.00% over 2%"
+    texts.estimates(1.0, names, [OVER, OVER, OVER, BELOW])
     texts.alarm(2.0, True, "right_wing_drag", ("glrt", "shape"))
-    texts.estimates(names, [OVER, OVER, BELOW, BELOW])  # lw_lift back before it was said
+    texts.estimates(3.0, names, [OVER, OVER, BELOW, BELOW])  # lw_lift back before it was said
     assert texts.due(4.9) is None
     assert [text.text for text in (texts.due(5.0), texts.due(10.0))] == [
-        "UAV FDI: rw_drag 3.0% over 2%", "UAV FDI alarm: right_wing_drag (glrt,shape)"]
+        "UAV FDI: rw_drag 3.00% over 2%", "UAV FDI alarm: right_wing_drag (glrt,shape)"]
     assert texts.due(20.0) is None
 
 
 def test_texts_beyond_the_waiting_limit_are_counted_not_sent():
-    texts = GroundTexts(min_interval_s=1.0, alarm_end_hold_s=0.0)
+    texts = GroundTexts(min_interval_s=1.0, hold_s=0.0)
     for k in range(MAX_WAITING + 5):  # onsets and ends, none sent meanwhile
         texts.alarm(2.0 * k, True, "aileron", ())
         texts.alarm(2.0 * k + 1.0, False, "", ())

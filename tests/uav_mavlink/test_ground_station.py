@@ -62,7 +62,7 @@ def test_estimates_and_alarms_reach_mavproxy_between_autopilot_and_node(
                 template_kinds=["elevator"], template_alarm=[step >= 40],
                 combined_alarm=step >= 40, cause="elevator" if step >= 40 else ""))
             run_steps(graph, autopilot, 1)
-        expected = [f"UAV FDI: rw_lift {over:.1f}% over {DETECTION_THRESHOLD_PCT:g}%",
+        expected = [f"UAV FDI: rw_lift {over:.2f}% over {DETECTION_THRESHOLD_PCT:g}%",
                     "UAV FDI alarm: elevator (fast,shape)"]
         assert graph.wait("MAVProxy shows both texts", lambda: all(
             text in mavproxy.output() for text in expected), 15), (

@@ -1,8 +1,9 @@
 """Every STATUSTEXT a ground station gets over the default flight (four wing faults, the
 shipped detector: its GLRT, parameter, fast and template tests all alarm), as mavlink_node
 makes them from faults/estimate and faults/alarm at the simulator's pace behind ArduPlane
-(10 times real time): none empty, none cut, one onset and one end per alarm, each onset
-naming the cause faults/alarm gives, never two texts within the interval."""
+(10 times real time), with mavlink_node's default interval and hold: none empty, none cut,
+one onset and one end per alarm, each onset naming the cause faults/alarm gives, never two
+texts within the interval."""
 
 from __future__ import annotations
 
@@ -17,8 +18,10 @@ from uav_fault_estimator.detection.detector_settings import (
 )
 from uav_fault_estimator.detection.signatures import CAUSES
 from uav_mavlink.ground_reports import (
+    HOLD_S,
     TEST_WORDS,
     TEXT_CHARS,
+    TEXT_INTERVAL_S,
     UNKNOWN_CAUSE,
     GroundTexts,
     alarm_tests,
@@ -27,7 +30,6 @@ from uav_mavlink.ground_reports import (
 pytestmark = pytest.mark.timeout(120)
 SPEED = 10.0  # flight seconds per wall second: autopilot_node as ArduPlane
 POLL_S = 0.1  # the node's text timer [s, wall time]
-INTERVAL_S, HOLD_S = 1.0, 3.0  # mavlink_node's defaults
 
 
 @pytest.fixture(scope="module")
@@ -37,11 +39,11 @@ def flight_texts(default_scenario):
     flight = fly_on_grid(default_scenario, 0.2)
     samples = detector_samples(self_tuning_detector(DetectorSettings()),
                                flight.detector_flight)
-    texts, said, poll_s = GroundTexts(INTERVAL_S, HOLD_S), [], 0.0
+    texts, said, poll_s = GroundTexts(TEXT_INTERVAL_S, HOLD_S), [], 0.0
     for sample in samples:
         seeded = default_scenario.faults_pct(sample.time_s)
         seeded_pct = [seeded.get(name, 0.0) for name in PAPER_FAULT_NAMES]
-        texts.estimates(PAPER_FAULT_NAMES, seeded_pct)
+        texts.estimates(sample.time_s, PAPER_FAULT_NAMES, seeded_pct)
         texts.alarm(sample.time_s, sample.combined_alarm, sample.cause, alarm_tests(
             sample.alarm, sample.parameter_deviation, sample.parameter_threshold,
             sample.fast_alarm, sample.template_alarm))
@@ -81,7 +83,7 @@ def test_no_text_is_empty_cut_or_sent_within_the_interval(flight_texts):
             assert text.startswith("UAV FDI: ") and text.endswith(
                 f"{DETECTION_THRESHOLD_PCT:g}%"), text
     wall_s = [wall for wall, _, _ in said]
-    assert min(np.diff(wall_s)) >= INTERVAL_S - 1e-9
+    assert min(np.diff(wall_s)) >= TEXT_INTERVAL_S - 1e-9
     print("\n".join(f"{wall:6.1f} s  {text}" for wall, _, text in said))
 
 

@@ -128,7 +128,7 @@ def test_estimates_and_alarms_reach_the_ground_station_and_nothing_else_is_sent(
     assert 4 * 4 <= len(named) <= 4 * 8  # at most 2 Hz over 3 s (the first from the start)
     assert ("rw_lift", pytest.approx(over)) in named
     texts = [m.text for m in autopilot.received if m.get_type() == "STATUSTEXT"]
-    assert texts == [f"UAV FDI: rw_lift {over:.1f}% over {DETECTION_THRESHOLD_PCT:g}%",
+    assert texts == [f"UAV FDI: rw_lift {over:.2f}% over {DETECTION_THRESHOLD_PCT:g}%",
                      "UAV FDI alarm: aileron (glrt)"], texts
     assert all(m.severity == mavutil.mavlink.MAV_SEVERITY_WARNING
                for m in autopilot.received if m.get_type() == "STATUSTEXT")

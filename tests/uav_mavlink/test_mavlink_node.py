@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from helpers.diagnostics import latest_values
+from uav_aircraft.fdm import loaded_fuel_kg
+from uav_aircraft.vehicles import load_vehicle
 from uav_common.loopback import free_udp_port
 from uav_common.ros.qos import STREAM_QOS
 from uav_common.ros_processes import ros2_run_argv
@@ -121,7 +123,9 @@ def test_an_arduplane_stream_becomes_the_projects_streams(start_process, graph):
     assert last.altitude_m == pytest.approx(120.0)
     assert (last.velocity_north_mps, last.velocity_down_mps) == pytest.approx((19.5, 1.2))
     assert (last.roll_rate_radps, last.yaw_rate_radps) == pytest.approx((0.1, 0.03), abs=1e-6)
-    assert math.isnan(last.engine_speed_rpm) and last.fuel_mass_kg == 0.0
+    # no engine speed streamed; the fuel the default vehicle's model carries (5 kg)
+    assert math.isnan(last.engine_speed_rpm)
+    assert last.fuel_mass_kg == pytest.approx(loaded_fuel_kg(load_vehicle("aerosonde")))
 
     controls = received["/controls"][-1]
     limit_rad = 0.5236  # aerosonde_sim.yaml: 500 us of throw to 0.5236 rad

@@ -7,12 +7,13 @@ text 50 (pymavlink truncates silently), so every text here is made to fit whole.
 estimate goes out under a short name (SHORT_NAMES). A text is said on a change only: the
 detector's combined alarm starting (WARNING: its cause, as faults/alarm names it, and the
 tests that raised it) and ending (NOTICE: how long it lasted), an estimate crossing the
-detection threshold upwards (WARNING) or back (NOTICE), with its value. An alarm that stops
-for less than `alarm_end_hold_s` of flight time and starts again is the same alarm, so a
-flickering test is one onset and one end. Texts leave at most one per `min_interval_s` of
-wall time, in order; an estimate's text still waiting when its estimate crosses back is
-withdrawn (the value NAMED_VALUE_FLOAT carries says the rest), and at most MAX_WAITING texts
-wait (further ones are counted, not sent).
+detection threshold upwards (WARNING) or back (NOTICE), with its value. An alarm, or an
+estimate over the threshold, that stops for less than `hold_s` of flight time and starts
+again goes on, so a flickering test or an estimate hovering at the threshold is one onset
+and one end. Texts leave at most one per `min_interval_s` of wall time, in order; an
+estimate's text still waiting when its estimate is back under is withdrawn (the value
+NAMED_VALUE_FLOAT carries says the rest), and at most MAX_WAITING texts wait (further ones
+are counted, not sent).
 """
 
 from __future__ import annotations
@@ -29,6 +30,10 @@ PREFIX = "UAV FDI"  # every text's first word, so a ground station's reader know
 ALARM_SEVERITY = mavlink.MAV_SEVERITY_WARNING  # shown and spoken by the ground stations
 END_SEVERITY = mavlink.MAV_SEVERITY_NOTICE  # shown, not alarming
 MAX_WAITING = 20  # texts held back by the interval; more are counted as dropped
+TEXT_INTERVAL_S = 1.0  # default least wall time between two texts [s]
+# Default flight time an alarm or estimate stays off before its end is said [s]: on the
+# default flight the detector's combined alarm pauses for 3-10 s within one failure.
+HOLD_S = 10.0
 # The detector's tests, as the texts name them: the self-tuning test (a channel's GLRT and
 # its parameter test agreeing, Blanke & Hansen section III.D), the fast window test and the
 # template (learned failure shape) test: the three that raise the combined alarm.
@@ -85,9 +90,10 @@ def alarm_end_text(cause: str, duration_s: float) -> str:
 
 
 def estimate_text(name: str, value_pct: float, over: bool) -> str:
-    """`UAV FDI: NAME V% over 2%` or `... under 2%` (name: the short one)."""
+    """`UAV FDI: NAME V% over 2%` or `... under 2%` (name: the short one; V to 0.01 %, so
+    that a value just under the threshold never reads as it)."""
     side = "over" if over else "under"
-    return f"{PREFIX}: {name} {value_pct:.1f}% {side} {DETECTION_THRESHOLD_PCT:g}%"[:TEXT_CHARS]
+    return f"{PREFIX}: {name} {value_pct:.2f}% {side} {DETECTION_THRESHOLD_PCT:g}%"[:TEXT_CHARS]
 
 
 @dataclass(frozen=True)
@@ -100,13 +106,21 @@ class GroundText:
 
 
 @dataclass
-class AlarmState:
-    """The combined alarm as told: on since onset_s, off since off_s (None while on) [s,
-    flight time], its cause at the onset."""
+class Episode:
+    """An alarm or an estimate over the threshold, as told: on since onset_s, off since
+    off_s (None while on) [s, flight time]; an alarm's cause at the onset."""
 
     onset_s: float
-    cause: str
+    cause: str = ""
     off_s: float | None = None
+
+    def ended(self, flight_s: float, on: bool, hold_s: float) -> bool:
+        """Whether, on or not at flight_s [s], the episode has now been off for hold_s."""
+        if on:
+            self.off_s = None
+        elif self.off_s is None:
+            self.off_s = flight_s
+        return not on and flight_s - self.off_s >= hold_s
 
 
 @dataclass
@@ -115,42 +129,43 @@ class GroundTexts:
     texts out through `due`."""
 
     min_interval_s: float  # least wall time between two texts [s]
-    alarm_end_hold_s: float  # flight time an alarm is off before its end is said [s]
+    hold_s: float  # flight time an alarm or estimate is off before its end is said [s]
     said_s: float | None = None  # wall time of the last text [s]
     waiting: list[GroundText] = field(default_factory=list)
     dropped: int = 0  # texts not sent: more than MAX_WAITING were waiting
-    over: set[str] = field(default_factory=set)  # short names told over the threshold
-    alarm_state: AlarmState | None = None  # the alarm told on; None while none is
+    over: dict[str, Episode] = field(default_factory=dict)  # estimates told over, by name
+    alarm_on: Episode | None = None  # the alarm told on; None while none is
 
-    def estimates(self, names: Sequence[str], values_pct: Sequence[float]) -> None:
-        """The newest estimates [%]: a text for each crossing the threshold."""
+    def estimates(self, flight_s: float, names: Sequence[str],
+                  values_pct: Sequence[float]) -> None:
+        """The estimates [%] at flight_s [s]: a text for each reaching the threshold, and
+        for each back under it for hold_s."""
         for name, value in named_values(names, values_pct):
             over = value >= DETECTION_THRESHOLD_PCT
-            if over == (name in self.over):
-                continue
-            (self.over.add if over else self.over.discard)(name)
-            waiting = [text for text in self.waiting if text.key == name]
-            if waiting:  # crossed back before its text left: withdrawn
-                self.waiting.remove(waiting[0])
-            else:
-                self._wait(GroundText(ALARM_SEVERITY if over else END_SEVERITY,
-                                      estimate_text(name, value, over), name))
+            episode = self.over.get(name)
+            if over and episode is None:
+                self.over[name] = Episode(flight_s)
+                self._wait(GroundText(ALARM_SEVERITY, estimate_text(name, value, True), name))
+            elif episode is not None and episode.ended(flight_s, over, self.hold_s):
+                del self.over[name]
+                waiting = [text for text in self.waiting if text.key == name]
+                if waiting:  # back under before its text left: withdrawn
+                    self.waiting.remove(waiting[0])
+                else:
+                    self._wait(GroundText(END_SEVERITY, estimate_text(name, value, False),
+                                          name))
 
     def alarm(self, flight_s: float, combined_alarm: bool, cause: str,
               tests: Sequence[str]) -> None:
         """The detector's combined alarm at flight_s [s], its cause and raising tests."""
-        state = self.alarm_state
-        if combined_alarm and state is None:
-            self.alarm_state = AlarmState(flight_s, cause)
+        episode = self.alarm_on
+        if combined_alarm and episode is None:
+            self.alarm_on = Episode(flight_s, cause)
             self._wait(GroundText(ALARM_SEVERITY, alarm_onset_text(cause, tests), "alarm"))
-        elif combined_alarm and state is not None:
-            state.off_s = None
-        elif state is not None and state.off_s is None:
-            state.off_s = flight_s
-        elif state is not None and flight_s - state.off_s >= self.alarm_end_hold_s:
-            self.alarm_state = None
+        elif episode is not None and episode.ended(flight_s, combined_alarm, self.hold_s):
+            self.alarm_on = None
             self._wait(GroundText(END_SEVERITY, alarm_end_text(
-                state.cause, state.off_s - state.onset_s), "alarm"))
+                episode.cause, episode.off_s - episode.onset_s), "alarm"))
 
     def due(self, now_s: float) -> GroundText | None:
         """The next text to send at wall time now_s [s], if the interval allows one."""

@@ -25,7 +25,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from uav_aircraft.fdm import loaded_fuel_kg
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 from uav_common.ros_processes import NO_LOG_FILE_ROS_ARGS, SIM_TIME_ROS_ARGS
 from uav_sim.scenario import load_scenario
@@ -147,16 +146,6 @@ def played_autopilot_ros_args(executable: str, stack: str, port: int,
     raise ValueError(f"{executable} is not one of the link's nodes")
 
 
-def vehicle_default_ros_args(executable: str, vehicle: str) -> list[str]:
-    """What a node is given from the vehicle's folder where the node cannot read it itself,
-    as a default (placed before a parameter file, which overrides it: rcl takes the last):
-    mavlink_node's fuel mass, what the vehicle's model carries (loaded_fuel_kg; no autopilot
-    streams it), as demo.sh --via-mavlink gives it."""
-    if executable == LISTENER:
-        return ["-p", f"fuel_mass_kg:={loaded_fuel_kg(load_vehicle(vehicle))!r}"]
-    return []
-
-
 def link_residual_ros_args(stack: str) -> list[str]:
     """residual_node's ROS arguments behind a stack's link: PX4 streams no engine speed, so
     the models turn the propeller at its steady speed."""
@@ -188,8 +177,8 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
     modelling the scenario's vehicle, then foxglove_node for the whole graph; params: a
     parameter file for every node. mavlink (a connection, as mavlink_node takes it): one
     aircraft on an autopilot instead, mavlink_node listening on it and publishing /clock in
-    the simulator's place, every node modelling `vehicle`, mavlink_node with the vehicle's
-    defaults (vehicle_default_ros_args) unless the parameter file says otherwise.
+    the simulator's place, every node modelling `vehicle` (mavlink_node takes the fuel its
+    model carries unless the parameter file says otherwise).
     ScenarioError (a ValueError) for a scenario that cannot be read, ValueError for mavlink
     with scenarios."""
     if mavlink and scenarios:
@@ -203,11 +192,8 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
         for executable in VEHICLE_NODES:
             if mavlink and executable == SIMULATOR:
                 executable = LISTENER
-            # the vehicle's defaults, then the parameter file, then what the graph sets (rcl:
-            # the last wins)
-            args = [*vehicle_default_ros_args(executable, vehicles[index]), *common,
-                    *node_ros_args(executable, namespace, index == 0, calibration,
-                                   vehicles[index])]
+            args = [*common, *node_ros_args(executable, namespace, index == 0, calibration,
+                                            vehicles[index])]
             if executable == SIMULATOR and scenarios:
                 args += ["-p", f"scenario:={scenarios[index]}"]
             if executable == LISTENER:

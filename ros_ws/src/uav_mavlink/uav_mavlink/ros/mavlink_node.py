@@ -38,8 +38,10 @@ from rclpy.clock import ClockType
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from uav_aircraft.airframe import load_airframe
-from uav_aircraft.vehicle_parameter import VEHICLE_PARAMETER
+from uav_aircraft.fdm import fuel_on_board_kg
+from uav_aircraft.vehicle_parameter import FUEL_MASS_PARAMETER, VEHICLE_PARAMETER
 from uav_aircraft.vehicles import load_vehicle
+from uav_common.health import VEHICLE_KEY
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.diagnostics import OK, WARN, Diagnostics
 from uav_common.ros.messages import (
@@ -76,7 +78,13 @@ from uav_mavlink.autopilot_messages import (
     WIND,
     read_message,
 )
-from uav_mavlink.ground_reports import GroundTexts, alarm_tests, named_values
+from uav_mavlink.ground_reports import (
+    HOLD_S,
+    TEXT_INTERVAL_S,
+    GroundTexts,
+    alarm_tests,
+    named_values,
+)
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
 from uav_mavlink.link_watch import LinkWatch
 from uav_mavlink.project_streams import StreamConversion
@@ -116,8 +124,7 @@ PARAMETERS = {
     "slow_max_age_s": ParameterSpec(
         "the longest the wind, setpoints and engine speed are held (not waited for, not "
         "interpolated) [s]", 3.0, 0.1, 60.0),
-    "fuel_mass_kg": ParameterSpec("the fuel on board, which no autopilot streams (0 for an "
-                                  "electric aircraft) [kg]", 0.0, 0.0, 1000.0),
+    "fuel_mass_kg": FUEL_MASS_PARAMETER,
     "pitch_trim_deg": ParameterSpec(
         "added to ATTITUDE's pitch: ArduPlane subtracts its pitch trim parameter from the "
         "pitch it sends (PTCH_TRIM_DEG; 0 for PX4) [deg]", 0.0, -45.0, 45.0),
@@ -141,14 +148,15 @@ PARAMETERS = {
     "ground_alarms": ParameterSpec(
         "send a STATUSTEXT when the detector's combined alarm (faults/alarm) starts "
         "(WARNING: its cause and tests) and ends (NOTICE: its length), and when an estimate "
-        "crosses the detection threshold (WARNING over, NOTICE back under)", True),
+        "reaches the detection threshold (WARNING) and is back under it (NOTICE)", True),
     "ground_text_interval_s": ParameterSpec(
         "the least time between two STATUSTEXT lines; lines wait their turn, in order "
-        "[s, wall time]", 1.0, 0.1, 600.0),
-    "ground_alarm_end_hold_s": ParameterSpec(
-        "how long the combined alarm stays off before its end is said: a shorter pause is "
-        "the same alarm, so a flickering test gives one onset and one end [s, flight time]",
-        3.0, 0.0, 60.0),
+        "[s, wall time]", TEXT_INTERVAL_S, 0.1, 600.0),
+    "ground_end_hold_s": ParameterSpec(
+        "how long the combined alarm, or an estimate over the threshold, stays off before "
+        "its end is said: a shorter pause goes on, so a flickering test or an estimate "
+        "hovering at the threshold gives one onset and one end [s, flight time]", HOLD_S,
+        0.0, 600.0),
     "qos": QOS_PARAMETER,
 }
 READ_PERIOD_S = 0.005  # how often the link is read [s, wall time]
@@ -174,7 +182,8 @@ class MavlinkNode(Node):
             OUTPUTS: p["outputs_max_age_s"], SETPOINTS: p["slow_max_age_s"],
             VELOCITY_SETPOINT: p["slow_max_age_s"],
             WIND: p["slow_max_age_s"], ENGINE: p["slow_max_age_s"]},
-            p["fuel_mass_kg"], math.radians(p["pitch_trim_deg"]))
+            fuel_on_board_kg(p["fuel_mass_kg"], load_vehicle(p["vehicle"])),
+            math.radians(p["pitch_trim_deg"]))
         self.conversion = StreamConversion(self.airframe, p["wind_filter_tau_s"])
         self.link = open_link(p["connection"], p["source_system"])
         qos = STREAM_QOS_PROFILES[p["qos"]]
@@ -212,8 +221,7 @@ class MavlinkNode(Node):
         self.other_systems: set[int] = set()
         self.missing: tuple[str, ...] = ()  # streams missing at the last sample
         self.heard_s: dict[str, float] = {}  # each stream's last reading [s, wall time]
-        self.ground_texts = GroundTexts(p["ground_text_interval_s"],
-                                        p["ground_alarm_end_hold_s"])
+        self.ground_texts = GroundTexts(p["ground_text_interval_s"], p["ground_end_hold_s"])
         self.estimates_sent_s = -math.inf  # wall time of the last NAMED_VALUE_FLOATs [s]
         if p["ground_estimates_hz"] > 0 or p["ground_alarms"]:
             self.create_subscription(FaultEstimate, "faults/estimate", self.on_estimate, qos)
@@ -433,7 +441,8 @@ class MavlinkNode(Node):
                 self._send(lambda link, n=name, v=value: link.mav.named_value_float_send(
                     boot_ms, n.encode(), v))
         if self.parameters["ground_alarms"]:
-            self.ground_texts.estimates(message.names, message.values_pct)
+            self.ground_texts.estimates(stamp_seconds(message.header.stamp), message.names,
+                                        message.values_pct)
             self.send_texts()
 
     def on_alarm(self, message: FaultAlarm) -> None:
@@ -479,7 +488,8 @@ class MavlinkNode(Node):
         missing = self._heard_missing(self.last_sample.missing if self.last_sample else ())
         stale = [stream for stream, heard_s in sorted(self.heard_s.items())
                  if now_s - heard_s > self.assembly.max_age_s[stream]]
-        values = {"autopilot": self.autopilot or "-", "system": self.target_system,
+        values = {VEHICLE_KEY: self.parameters["vehicle"],
+                  "autopilot": self.autopilot or "-", "system": self.target_system,
                   "link": "alive" if watch.alive else "lost" if watch.heard_s else "not heard",
                   "link_losses": watch.losses,
                   "servo_map": self.servo_map if self.servo_reads is None else "file, "
