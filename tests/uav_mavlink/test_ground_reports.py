@@ -64,6 +64,7 @@ def test_every_text_of_every_cause_and_test_fits_whole():
     for fault, value in itertools.product(MODEL_FAULT_NAMES, (-123.45, 2.0, 100.0)):
         text = estimate_text(short_name(fault), value, value >= DETECTION_THRESHOLD_PCT)
         assert len(text) <= TEXT_CHARS and text.endswith(f"{DETECTION_THRESHOLD_PCT:g}%")
+    assert estimate_text("lw_lift", -0.001, False) == "UAV FDI: lw_lift 0.00% under 2%"
 
 
 def test_the_tests_raising_an_alarm_are_named_from_the_alarm_message():

@@ -93,7 +93,8 @@ def estimate_text(name: str, value_pct: float, over: bool) -> str:
     """`UAV FDI: NAME V% over 2%` or `... under 2%` (name: the short one; V to 0.01 %, so
     that a value just under the threshold never reads as it)."""
     side = "over" if over else "under"
-    return f"{PREFIX}: {name} {value_pct:.2f}% {side} {DETECTION_THRESHOLD_PCT:g}%"[:TEXT_CHARS]
+    value = round(value_pct, 2) + 0.0  # + 0.0: -0.001 reads 0.00, not -0.00
+    return f"{PREFIX}: {name} {value:.2f}% {side} {DETECTION_THRESHOLD_PCT:g}%"[:TEXT_CHARS]
 
 
 @dataclass(frozen=True)
