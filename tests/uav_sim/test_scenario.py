@@ -59,7 +59,7 @@ def test_default_scenario_values(default_data):
         ("seed", 1.5, "'seed' must be a non-negative integer"),
         ("wind.turbulence", "strong", "'wind.turbulence' must be one of from_wind, none, light"),
         ("sensors", "all", "'sensors' must be a mapping"),
-        ("sensors.pitot", True, "unknown key 'sensors.pitot' (known: air_data, noise)"),
+        ("sensors.pitot", True, "unknown key 'sensors.pitot' (known: air_data, noise, vanes)"),
         ("sensors.air_data", "yes", "'sensors.air_data' must be true or false, got 'yes'"),
         ("sensors.noise", 1, "'sensors.noise' must be true or false, got 1"),
         ("faults.0.name", "left_engine_fire", "'faults[0].name' must be one of"),
@@ -142,6 +142,19 @@ def test_sensors_default_to_air_data_and_noise(tmp_path, default_data):
     default_data["sensors"] = {"noise": False}
     scenario = load_scenario(write(tmp_path, default_data))
     assert scenario.sensors.air_data and not scenario.sensors.noise
+
+
+def test_vanes_go_with_air_data_unless_a_pitot_flies_alone(tmp_path, default_data):
+    default_data["sensors"] = {"vanes": False}
+    sensors = load_scenario(write(tmp_path, default_data)).sensors
+    assert sensors.air_data and not sensors.vanes
+    default_data["sensors"] = {"air_data": False}
+    assert not load_scenario(write(tmp_path, default_data)).sensors.vanes
+    default_data["sensors"] = {"air_data": False, "vanes": True}
+    with pytest.raises(ScenarioError) as error:
+        load_scenario(write(tmp_path, default_data))
+    assert ("'sensors.vanes' is true but 'sensors.air_data' is false: vanes are air data"
+            in str(error.value))
 
 
 def test_guidance_defaults_to_the_vector_field_and_reads_mpc_settings(tmp_path, default_data):

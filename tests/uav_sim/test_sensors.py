@@ -112,6 +112,15 @@ def test_without_air_data_the_other_channels_keep_their_noise(default_scenario):
     assert np.array_equal(column(with_air_data, "state"), column(without, "state"))
 
 
+def test_a_pitot_without_vanes_measures_the_airspeed_alone(default_scenario):
+    with_vanes = fly(short(default_scenario, 7, duration_s=3.0))
+    pitot = fly(short(default_scenario, 7, duration_s=3.0, vanes=False))
+    airspeed, angles = column(pitot, "air_data")[:, 0], column(pitot, "air_data")[:, 1:]
+    assert np.array_equal(airspeed, column(with_vanes, "air_data")[:, 0])
+    assert np.isnan(angles).all()
+    assert np.array_equal(column(with_vanes, "state"), column(pitot, "state"))
+
+
 @pytest.mark.parametrize("turbulence", sorted(IDEAL_SENSOR_HASHES))
 def test_ideal_sensors_reproduce_the_simulator_bit_for_bit(default_scenario, turbulence):
     wind = dataclasses.replace(default_scenario.wind, turbulence=turbulence)

@@ -40,7 +40,8 @@ STATE_UNITS: tuple[str, ...] = (
 
 # Air data (pitot-static airspeed, alpha and sideslip vanes): message AirData, whose fields
 # are AIR_DATA_FIELDS (the airspeed field says that it is the true airspeed).
-AIR_DATA_CHANNELS: tuple[str, ...] = ("airspeed", "angle_of_attack", "sideslip")
+VANE_CHANNELS: tuple[str, ...] = ("angle_of_attack", "sideslip")  # a flow-angle vane's
+AIR_DATA_CHANNELS: tuple[str, ...] = ("airspeed", *VANE_CHANNELS)
 AIR_DATA_FIELDS: tuple[str, ...] = ("true_airspeed_mps", "angle_of_attack_rad", "sideslip_rad")
 # Channels a scenario's sensor_dropouts may name.
 DROPOUT_CHANNELS: tuple[str, ...] = STATE_CHANNELS + AIR_DATA_CHANNELS

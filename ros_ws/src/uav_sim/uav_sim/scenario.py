@@ -103,11 +103,15 @@ class Guidance:
 
 @dataclass(frozen=True)
 class SensorSuite:
-    """What the aircraft carries: air data (pitot airspeed, alpha/beta vanes) or not, and
-    datasheet-typical sensor noise (uav_sim.sensors) or ideal sensors."""
+    """What the aircraft carries: air data (a pitot's airspeed, and the angle of attack and
+    sideslip of flow-angle vanes where `vanes`) or none, and datasheet-typical sensor noise
+    (uav_sim.sensors) or ideal sensors. A pitot without vanes is what ArduPlane and PX4
+    aircraft carry, and what their MAVLink link gives: the flow angles NaN. `vanes` means
+    nothing without air data; a scenario file's `vanes` defaults to its `air_data`."""
 
     air_data: bool = True
     noise: bool = True
+    vanes: bool = True
 
 
 @dataclass(frozen=True)
@@ -241,8 +245,13 @@ def _wind(reader: Reader) -> Wind:
 
 
 def _sensors(reader: Reader) -> SensorSuite:
-    reader.check_keys(set(), {"air_data", "noise"})
-    return SensorSuite(air_data=reader.flag("air_data", True), noise=reader.flag("noise", True))
+    reader.check_keys(set(), {"air_data", "noise", "vanes"})
+    air_data = reader.flag("air_data", True)
+    vanes = reader.flag("vanes", air_data)
+    if vanes and not air_data:
+        reader.fail("'sensors.vanes' is true but 'sensors.air_data' is false: vanes are air "
+                    "data")
+    return SensorSuite(air_data=air_data, noise=reader.flag("noise", True), vanes=vanes)
 
 
 # The guidance block's MPC keys and their ranges (MpcSettings' fields).

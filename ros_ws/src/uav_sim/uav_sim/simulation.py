@@ -33,6 +33,7 @@ from uav_common.channels import (
     SETPOINT_FIELDS,
     STATE_CHANNELS,
     STUCK_SURFACE_FAULT_NAMES,
+    VANE_CHANNELS,
 )
 
 from uav_sim.autopilot import Autopilot, FlightState
@@ -291,6 +292,8 @@ class Simulation:
         state, controls, air_data = self.sensors.measure(true_state, true_controls,
                                                          true_air_data)
         dropped = self.scenario.dropped_channels(self.time_s)
+        if not self.scenario.sensors.vanes:
+            dropped |= set(VANE_CHANNELS)
         if dropped:
             state, air_data = state.copy(), air_data.copy()
             for channel in dropped:
