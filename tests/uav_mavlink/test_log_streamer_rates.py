@@ -26,7 +26,7 @@ from uav_mavlink.log_streamer import (
     link_max_ages_s,
     listener_defaults_s,
     main,
-    message_intervals_s,
+    message_timings,
     raised_max_ages_s,
     rates_line,
 )
@@ -67,8 +67,8 @@ ADVISED_HZ = {"ATTITUDE": 25.0, "SERVO_OUTPUT_RAW": 10.0, "LOCAL_POSITION_NED": 
 @pytest.mark.timeout(30)
 def test_each_max_age_is_two_and_a_half_of_its_slowest_messages_intervals():
     messages = streamed(ALFA_LIKE_HZ)
-    assert set(message_intervals_s(messages)) == set(ALFA_LIKE_HZ)  # the heartbeat: not read
-    assert link_max_ages_s(messages) == {
+    assert set(message_timings(messages)) == set(ALFA_LIKE_HZ)  # the heartbeat: not read
+    assert link_max_ages_s(message_timings(messages)) == {
         "attitude_max_age_s": (1.0, "ATTITUDE"),  # 2.5 x 0.4 s; RAW_IMU's 0.25 s is shorter
         "outputs_max_age_s": (0.9, "SERVO_OUTPUT_RAW"),  # 2.5 x 0.333 s = 0.83 s, rounded up
         "position_max_age_s": (0.7, "LOCAL_POSITION_NED"),  # 0.625 s
@@ -80,15 +80,15 @@ def test_each_max_age_is_two_and_a_half_of_its_slowest_messages_intervals():
 def test_only_the_ages_above_the_nodes_defaults_are_said_on_one_line():
     messages = streamed(ALFA_LIKE_HZ)
     defaults = listener_defaults_s()  # attitude 0.2, position and outputs 0.5, air data 1
-    raised = raised_max_ages_s(link_max_ages_s(messages), defaults)
+    raised = raised_max_ages_s(link_max_ages_s(message_timings(messages)), defaults)
     assert list(raised) == ["attitude_max_age_s", "outputs_max_age_s", "position_max_age_s"]
-    assert rates_line(raised, message_intervals_s(messages)) == (
+    assert rates_line(raised, message_timings(messages)) == (
         "this log's rates (ATTITUDE 2.5 Hz, LOCAL_POSITION_NED 4.0 Hz, SERVO_OUTPUT_RAW 3.0 Hz) "
         "need mavlink_node --ros-args -p attitude_max_age_s:=1.0 -p outputs_max_age_s:=0.9 "
         "-p position_max_age_s:=0.7 (or in a parameter file: --write-params FILE)")
     advised = streamed(ADVISED_HZ)
-    assert raised_max_ages_s(link_max_ages_s(advised), defaults) == {}
-    assert rates_line({}, message_intervals_s(advised)) == (
+    assert raised_max_ages_s(link_max_ages_s(message_timings(advised)), defaults) == {}
+    assert rates_line({}, message_timings(advised)) == (
         "this log's rates: mavlink_node's default maximum ages hold")
 
 

@@ -59,36 +59,16 @@ os.environ.setdefault("MAVLINK20", "1")  # pymavlink reads it at its import
 
 from pymavlink import mavutil
 
-from uav_mavlink.autopilot_messages import (
-    AIRSPEED,
-    ATTITUDE,
-    ENGINE,
-    OUTPUTS,
-    POSITION,
-    RATES,
-    RATES_2,
-    SETPOINTS,
-    VELOCITY,
-    VELOCITY_SETPOINT,
-    WIND,
-    read_message,
-)
+from uav_mavlink.autopilot_messages import read_message
 from uav_mavlink.link import DIALECT
 from uav_mavlink.log_messages import TimedMessage, log_messages
+from uav_mavlink.sample_assembly import MAX_AGE_PARAMETERS
 
 PROGRAM = "log_streamer"
 DEFAULT_CONNECTION = "udpout:127.0.0.1:14550"
 AUTOPILOT_COMPONENT = mavutil.mavlink.MAV_COMP_ID_AUTOPILOT1  # 1
 _NETWORK_PREFIXES = ("udpout:", "udpin:", "udp:", "udpbcast:", "tcp:", "tcpin:", "mcast:",
                      "ws:", "wss:", "wsserver:")
-# The mavlink_node parameter that bounds the gaps of each stream interpolated over (or, for
-# the held streams, how long its last reading is held): its SampleAssembly's max ages.
-MAX_AGE_PARAMETERS = {
-    ATTITUDE: "attitude_max_age_s", RATES: "attitude_max_age_s",
-    RATES_2: "attitude_max_age_s", POSITION: "position_max_age_s",
-    VELOCITY: "position_max_age_s", AIRSPEED: "air_data_max_age_s",
-    OUTPUTS: "outputs_max_age_s", SETPOINTS: "slow_max_age_s",
-    VELOCITY_SETPOINT: "slow_max_age_s", WIND: "slow_max_age_s", ENGINE: "slow_max_age_s"}
 AGE_STEP_S = 0.1  # the advised maximum ages are rounded up to this [s]
 LISTENER, DETECTOR = "mavlink_node", "detector_node"
 
@@ -125,28 +105,27 @@ def play(messages: Sequence[TimedMessage], send: Callable[[Any], None], speed: f
     return len(messages)
 
 
-def message_intervals_s(messages: Sequence[TimedMessage]) -> dict[str, float]:
-    """The median interval between consecutive messages of each type the link reads
-    (autopilot_messages.read_message), by MAVLink message type [s]; a type sent once: not
-    given."""
-    times: dict[str, list[float]] = {}
+def message_timings(messages: Sequence[TimedMessage]) -> dict[str, tuple[str, float]]:
+    """Per MAVLink message type the link reads (autopilot_messages.read_message, each
+    message read once): its stream and the median interval between consecutive messages
+    [s]; a type sent once: not given."""
+    times: dict[str, tuple[str, list[float]]] = {}
     for timed in messages:
-        if read_message(timed.message) is not None:
-            times.setdefault(timed.message.get_type(), []).append(timed.boot_time_s)
-    return {kind: statistics.median(b - a for a, b in itertools.pairwise(sent))
-            for kind, sent in times.items() if len(sent) > 1}
+        if (reading := read_message(timed.message)) is not None:
+            times.setdefault(timed.message.get_type(), (reading.stream, []))[1].append(
+                timed.boot_time_s)
+    return {kind: (stream, statistics.median(b - a for a, b in itertools.pairwise(sent)))
+            for kind, (stream, sent) in times.items() if len(sent) > 1}
 
 
-def link_max_ages_s(messages: Sequence[TimedMessage]) -> dict[str, tuple[float, str]]:
-    """The maximum age each of mavlink_node's *_max_age_s parameters needs for these
-    messages' rates [s], and the message that needs it: per parameter, GAP_FACTOR times the
-    longest median interval of the messages of its streams (MAX_AGE_PARAMETERS), rounded
-    up to AGE_STEP_S."""
-    stream_of = {timed.message.get_type(): reading.stream for timed in messages
-                 if (reading := read_message(timed.message)) is not None}
+def link_max_ages_s(timings: Mapping[str, tuple[str, float]]) -> dict[str, tuple[float, str]]:
+    """The maximum age each of mavlink_node's *_max_age_s parameters needs for the
+    messages' timings (message_timings) [s], and the message that needs it: per parameter,
+    GAP_FACTOR times the longest median interval of the messages of its streams
+    (MAX_AGE_PARAMETERS), rounded up to AGE_STEP_S."""
     needed: dict[str, tuple[float, str]] = {}
-    for kind, interval_s in sorted(message_intervals_s(messages).items()):
-        parameter = MAX_AGE_PARAMETERS[stream_of[kind]]
+    for kind, (stream, interval_s) in sorted(timings.items()):
+        parameter = MAX_AGE_PARAMETERS[stream]
         age_s = round(math.ceil(round(GAP_FACTOR * interval_s / AGE_STEP_S, 6)) * AGE_STEP_S, 6)
         if parameter not in needed or age_s > needed[parameter][0]:
             needed[parameter] = (age_s, kind)
@@ -161,12 +140,12 @@ def raised_max_ages_s(needed: Mapping[str, tuple[float, str]],
 
 
 def rates_line(raised: Mapping[str, tuple[float, str]],
-               intervals_s: Mapping[str, float]) -> str:
+               timings: Mapping[str, tuple[str, float]]) -> str:
     """One line on the log's rates: the mavlink_node parameters they need, or that its
     defaults hold."""
     if not raised:
         return "this log's rates: mavlink_node's default maximum ages hold"
-    slow = ", ".join(f"{kind} {1.0 / intervals_s[kind]:.1f} Hz"
+    slow = ", ".join(f"{kind} {1.0 / timings[kind][1]:.1f} Hz"
                      for kind in sorted({kind for _, kind in raised.values()}))
     return (f"this log's rates ({slow}) need mavlink_node --ros-args "
             + " ".join(f"-p {parameter}:={age_s!r}" for parameter, (age_s, _) in raised.items())
@@ -247,8 +226,9 @@ def main(argv: list[str] | None = None) -> int:
         messages = log_messages(arguments.log)
     except ValueError as error:
         return _bad(str(error))
-    raised = raised_max_ages_s(link_max_ages_s(messages), listener_defaults_s())
-    line = rates_line(raised, message_intervals_s(messages))
+    timings = message_timings(messages)
+    raised = raised_max_ages_s(link_max_ages_s(timings), listener_defaults_s())
+    line = rates_line(raised, timings)
     print(line, flush=True)
     if arguments.write_params:
         return _write_params(arguments, raised, line)

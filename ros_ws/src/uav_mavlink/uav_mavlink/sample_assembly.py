@@ -79,6 +79,14 @@ MAX_FILL_S = 5.0
 HELD_STREAMS = (SETPOINTS, VELOCITY_SETPOINT, WIND, ENGINE)
 # The body rates' sources, a tie kept by the first.
 RATE_SOURCES = (ATTITUDE, RATES, RATES_2)
+# The mavlink_node parameter that sets each stream's max_age_s (the IMU streams take
+# ATTITUDE's; the held streams are held that long).
+MAX_AGE_PARAMETERS = {
+    ATTITUDE: "attitude_max_age_s", RATES: "attitude_max_age_s",
+    RATES_2: "attitude_max_age_s", POSITION: "position_max_age_s",
+    VELOCITY: "position_max_age_s", AIRSPEED: "air_data_max_age_s",
+    OUTPUTS: "outputs_max_age_s", SETPOINTS: "slow_max_age_s",
+    VELOCITY_SETPOINT: "slow_max_age_s", WIND: "slow_max_age_s", ENGINE: "slow_max_age_s"}
 # Readings over which a stream's median period is measured.
 PERIOD_WINDOW = 15
 # Channels that are angles [rad] (interpolated the short way round).

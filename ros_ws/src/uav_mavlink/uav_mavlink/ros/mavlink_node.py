@@ -66,18 +66,7 @@ from uav_fault_msgs.msg import (
     WindEstimate,
 )
 
-from uav_mavlink.autopilot_messages import (
-    AIRSPEED,
-    ATTITUDE,
-    ENGINE,
-    OUTPUTS,
-    POSITION,
-    SETPOINTS,
-    VELOCITY,
-    VELOCITY_SETPOINT,
-    WIND,
-    read_message,
-)
+from uav_mavlink.autopilot_messages import read_message
 from uav_mavlink.ground_reports import (
     HOLD_S,
     TEXT_INTERVAL_S,
@@ -88,7 +77,12 @@ from uav_mavlink.ground_reports import (
 from uav_mavlink.link import AUTOPILOTS, is_autopilot_heartbeat, open_link, send_heartbeat
 from uav_mavlink.link_watch import LinkWatch
 from uav_mavlink.project_streams import StreamConversion
-from uav_mavlink.sample_assembly import Sample, SampleAssembly, ros_offset_ns
+from uav_mavlink.sample_assembly import (
+    MAX_AGE_PARAMETERS,
+    Sample,
+    SampleAssembly,
+    ros_offset_ns,
+)
 from uav_mavlink.servo_setup import ServoParameterReads, airframe_from_servo_parameters
 
 PARAMETERS = {
@@ -176,12 +170,9 @@ class MavlinkNode(Node):
         p = self.parameters
         self.airframe = load_airframe(p["airframe"]
                                       or load_vehicle(p["vehicle"]).only_airframe_file())
-        self.assembly = SampleAssembly(p["sample_period_s"], {
-            ATTITUDE: p["attitude_max_age_s"], POSITION: p["position_max_age_s"],
-            VELOCITY: p["position_max_age_s"], AIRSPEED: p["air_data_max_age_s"],
-            OUTPUTS: p["outputs_max_age_s"], SETPOINTS: p["slow_max_age_s"],
-            VELOCITY_SETPOINT: p["slow_max_age_s"],
-            WIND: p["slow_max_age_s"], ENGINE: p["slow_max_age_s"]},
+        self.assembly = SampleAssembly(
+            p["sample_period_s"],
+            {stream: p[name] for stream, name in MAX_AGE_PARAMETERS.items()},
             fuel_on_board_kg(p["fuel_mass_kg"], load_vehicle(p["vehicle"])),
             math.radians(p["pitch_trim_deg"]))
         self.conversion = StreamConversion(self.airframe, p["wind_filter_tau_s"])
