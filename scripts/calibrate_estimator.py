@@ -5,12 +5,13 @@
 
 Flies the vehicle's fault-free scenario (its default flight in its turbulence from the wind,
 noisy sensors) with seeds from 301 and background winds of 20-25 % of its airspeed towards
-directions 360/N degrees apart, once with air data on board and once without (the paper's
-filtered wind only), through residual_node's residual generator with its default parameters,
-and writes each suite's per-channel variances and one-step correlations of the residuals
-(noise_model.py) to the YAML that mhe_node reads (default: the vehicle folder's
-residual_noise.yaml in this source tree). Other seeds than the detector's (101-112) and its
-held-out flights (201-212), and than the default scenario's 7 that the estimator is judged on.
+directions 360/N degrees apart, once per sensor suite (air data with vanes, a pitot without
+them, none: the paper's filtered wind only), through residual_node's residual generator
+with its default parameters, and writes each suite's per-channel variances and one-step
+correlations of the residuals (noise_model.py) to the YAML that mhe_node reads (default:
+the vehicle folder's residual_noise.yaml in this source tree). Other seeds than the
+detector's (101-112) and its held-out flights (201-212), and than the default scenario's 7
+that the estimator is judged on.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from uav_fault_estimator.chain.offline import (
     fault_free_flights,
     fault_free_residuals,
 )
-from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD, SUITES, fit_noise
+from uav_fault_estimator.estimation.noise_model import SUITE_SENSORS, fit_noise
 from uav_fault_estimator.reporting.calibration_output import write_calibration
 from uav_sim.scenario import SensorSuite
 
@@ -52,13 +53,13 @@ def main() -> int:
     arguments = parser.parse_args()
     started = time.monotonic()
     base = fault_free_flights(arguments.flights, FIRST_SEED, vehicle=arguments.vehicle)
-    scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=AIR_DATA_ON_BOARD[suite]))
-                 for suite in SUITES.values() for s in base]
+    scenarios = [dataclasses.replace(s, sensors=SensorSuite(air_data=air_data, vanes=vanes))
+                 for air_data, vanes in SUITE_SENSORS.values() for s in base]
     with Campaign(campaign_options(arguments)) as campaign:
         residuals = campaign.results(fault_free_residuals, scenarios, "fault-free flights")
     count = len(base)
     calibration = fit_noise({suite: residuals[k * count:(k + 1) * count]
-                             for k, suite in enumerate(SUITES.values())})
+                             for k, suite in enumerate(SUITE_SENSORS)})
     header = (f"# Written by scripts/calibrate_estimator.py: residuals of {count} fault-free "
               f"flights per sensor suite of\n# {describe_flights(base)}.\n"
               "# Valid for residual_node's default parameters.\n")

@@ -39,7 +39,7 @@ from uav_fault_estimator.campaigns.campaign import (
 )
 from uav_fault_estimator.chain.offline import fly_and_estimate, wind_variant
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
-from uav_fault_estimator.estimation.noise_model import AIR_DATA_ON_BOARD
+from uav_fault_estimator.estimation.noise_model import SUITE_SENSORS
 from uav_fault_estimator.reporting.metrics import fault_metrics
 from uav_sim.scenario import Scenario, SensorSuite, default_scenario_path, load_scenario
 
@@ -53,14 +53,14 @@ def flights(seeds: int) -> list[tuple[str, str, bool, Scenario]]:
     shipped = default_scenario_path()
     bases = {True: load_scenario(shipped), False: load_scenario(shipped.parent / "fault_free.yaml")}
     table = []
-    for suite, air_data in AIR_DATA_ON_BOARD.items():
+    for suite, (air_data, vanes) in SUITE_SENSORS.items():
         for turbulence in TURBULENCES:
             for faulted, base in bases.items():
                 for k in range(seeds):
                     scenario = wind_variant(base, FIRST_SEED + k, 360.0 * k / seeds,
                                             5.0 + 0.25 * k)
                     scenario = dataclasses.replace(
-                        scenario, sensors=SensorSuite(air_data=air_data),
+                        scenario, sensors=SensorSuite(air_data=air_data, vanes=vanes),
                         wind=dataclasses.replace(scenario.wind, turbulence=turbulence))
                     table.append((suite, turbulence, faulted, scenario))
     return table
@@ -82,7 +82,7 @@ def summarise(results: list[tuple[str, str, bool, dict]]) -> dict:
     """Per suite and turbulence: per fault the fault-free largest estimate (all flights),
     the faulted rmse mean and worst, and the worst delay (None if missed in any flight)."""
     summary: dict = {}
-    for suite in AIR_DATA_ON_BOARD:
+    for suite in SUITE_SENSORS:
         for turbulence in TURBULENCES:
             cell = [(faulted, f) for s, t, faulted, f in results if (s, t) == (suite, turbulence)]
             entry = {}

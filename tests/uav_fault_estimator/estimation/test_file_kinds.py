@@ -23,7 +23,7 @@ SCENARIO = scenarios_dir() / "default.yaml"
 CARBON_Z_SCENARIO = scenarios_dir() / "carbon_z_default.yaml"
 NOISE_EXPECTED = ("not a noise calibration (scripts/calibrate_estimator.py's file, a "
                   "vehicle's residual_noise.yaml), whose keys are vehicle, air_data, "
-                  "filtered_wind")
+                  "pitot, filtered_wind")
 DETECTOR_EXPECTED = ("not a detector calibration (scripts/calibrate_detector.py's or "
                      "screen_logs.py calibrate's file, a vehicle's detector_calibration.yaml), "
                      "whose keys are airframe, reference_airspeed_mps, sample_period_s, "
@@ -98,6 +98,6 @@ def test_a_file_of_another_kind_is_one_line_saying_what_was_expected_and_found(
 @pytest.mark.timeout(30)
 def test_the_files_of_the_right_kind_read(tmp_path):
     assert set(load_noise_calibration(shipped_noise_path(), "aerosonde").variances) == {
-        "air_data", "filtered_wind"}
+        "air_data", "pitot", "filtered_wind"}
     assert read_calibration(str(shipped_calibration_path())).airframe == "aerosonde_sim"
     assert load_model_calibration(model_calibration(tmp_path), "aerosonde").noise_file is None

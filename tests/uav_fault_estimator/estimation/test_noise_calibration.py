@@ -36,7 +36,8 @@ def test_the_shipped_noise_calibration_is_what_the_command_makes(tmp_path):
 
 def test_a_bad_calibration_file_is_one_message(tmp_path):
     path = tmp_path / "noise.yaml"
-    path.write_text("vehicle: aerosonde\nair_data: {variances: [1, 2]}\nfiltered_wind: {}\n")
+    path.write_text("vehicle: aerosonde\nair_data: {variances: [1, 2]}\npitot: {}\n"
+                    "filtered_wind: {}\n")
     with pytest.raises(ValueError, match=f"noise calibration {path}: cannot be read"):
         load_noise_calibration(path)
 

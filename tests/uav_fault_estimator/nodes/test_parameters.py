@@ -50,8 +50,8 @@ MHE_NAMES = ("arrival_centre, arrival_floor_variances_pct2, arrival_inflation, "
              "model_fit_threshold_sigmas, model_fit_window_s, "
              "noise_calibration_file, noise_variance_factor, prior_pct, qos, solver_eps_abs, "
              "solver_max_iter, solver_method, state_file, update_budget_ms, upper_bounds_pct, "
-             "vehicle, wait_for_subscribers, wind_error_handover_variance_m2ps2, "
-             "wind_error_sigma_mps")
+             "vehicle, wait_for_subscribers, wind_error_coefficient, "
+             "wind_error_handover_variance_m2ps2, wind_error_sigma_mps")
 
 
 @pytest.mark.timeout(30)
@@ -215,8 +215,8 @@ CASES = {
         "uav_fault_estimator", "mhe_node", ["-p", f"noise_calibration_file:={SCENARIO}"],
         f"mhe_node: noise calibration {SCENARIO}: not a noise calibration "
         "(scripts/calibrate_estimator.py's file, a vehicle's residual_noise.yaml), whose keys "
-        "are vehicle, air_data, filtered_wind; this file holds the keys name, duration_s, seed, "
-        "initial, waypoints_ne_m, guidance, wind, sensors, faults"),
+        "are vehicle, air_data, pitot, filtered_wind; this file holds the keys name, "
+        "duration_s, seed, initial, waypoints_ne_m, guidance, wind, sensors, faults"),
     "sensor_rate_zero": (
         "uav_sim", "sim_node", ["-p", "sensor_rate_hz:=0.0"],
         "sim_node: parameter sensor_rate_hz: 0.0 is out of range; it must be a real number in "

@@ -13,6 +13,7 @@ from uav_common.channels import PAPER_FAULT_NAMES
 from uav_common.message_fields import stamp_seconds
 from uav_common.ros.qos import DIAGNOSTICS_QOS, STREAM_QOS
 from uav_common.ros_processes import fast_flight_ros_args, ros2_run_argv
+from uav_fault_estimator.estimation.residuals import WIND_ERROR_NAMES
 from uav_fault_msgs.msg import Residuals
 
 pytestmark = pytest.mark.integration
@@ -69,12 +70,17 @@ def test_residuals_every_half_second_with_dropout_and_restart(
     assert stamps == pytest.approx(
         [PERIOD_S * k for k in range(1, first + 1)]
         + [PERIOD_S * k for k in range(1, expected - first + 1)], abs=1e-9)
-    columns = list(PAPER_FAULT_NAMES)  # the defaults
+    columns = list(PAPER_FAULT_NAMES + WIND_ERROR_NAMES)  # the defaults
     for message in received:
         assert list(message.fault_names) == columns
         sensitivity = np.array(message.sensitivity).reshape(6, -1)
         assert sensitivity.shape == (6, len(columns))
         assert np.all(np.isfinite(sensitivity)) and np.all(np.isfinite(message.residual))
+    # where the vanes measure the flow (every sample's since the start) the wind errors are 0
+    wind_columns = [np.array(message.sensitivity).reshape(6, -1)[:, len(PAPER_FAULT_NAMES):]
+                    for message in received if message.wind_source == Residuals.WIND_AIR_DATA
+                    and stamp_seconds(message.header.stamp) < 5.0]
+    assert wind_columns and not np.any(wind_columns)
     valid = {stamp: list(message.valid)
              for stamp, message in zip(stamps[:first], received[:first], strict=True)}
     row_only = [row != ANGULAR_Y for row in range(6)]

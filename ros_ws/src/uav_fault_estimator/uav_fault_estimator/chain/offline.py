@@ -25,8 +25,10 @@ from uav_fault_estimator.detection.detector import DetectorFlight
 from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.estimator_step import EstimatorStep, ResidualInput
 from uav_fault_estimator.estimation.model_calibration import SensorFlight
+from uav_fault_estimator.estimation.noise_model import without_wind_errors
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
+from uav_fault_estimator.estimation.residuals import WIND_PITOT
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
 
 _AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
@@ -151,19 +153,28 @@ def sensor_flight(scenario: Scenario) -> SensorFlight:
 
 def fault_free_residuals(scenario: Scenario) -> np.ndarray:
     """The residuals (K, 6) residual_node would publish for the scenario with its default
-    settings, on the update grid, where every row is valid. (y does not depend on S:
-    the sensitivities' model copies are left out.)"""
+    settings, on the update grid, where every row is valid; on a flight whose models fly a
+    pitot without vanes, what they carry beyond the wind errors (noise_model.
+    without_wind_errors), as the estimator sees them. (The faults' model copies are left
+    out: y does not depend on them.)"""
     sampler = residual_sampler(ResidualSettings(vehicle=scenario.vehicle, fault_names=()))
     simulation = Simulation(scenario)
-    sample, rows = simulation.sample(), []
+    sample, rows, wind_sensitivity, pitot = simulation.sample(), [], [], []
     while True:
         result = sampler.update(sample.time_s, sample.state, sample.controls,
                                 sample.wind_filtered_ned_mps, sample.air_data)
         if result is not None and result.valid.all():
             rows.append(result.residual)
+            wind_sensitivity.append(result.sensitivity)
+            pitot.append(result.wind_source == WIND_PITOT)
         if simulation.finished:
-            return np.array(rows)
+            break
         sample = simulation.step()
+    rows_array, pitot_rows = np.array(rows).reshape(-1, 6), np.array(pitot, dtype=bool)
+    if pitot_rows.any():
+        rows_array[pitot_rows] = without_wind_errors(rows_array[pitot_rows],
+                                                     np.array(wind_sensitivity)[pitot_rows])
+    return rows_array
 
 
 def wind_variant(scenario: Scenario, seed: int, wind_direction_deg: float,

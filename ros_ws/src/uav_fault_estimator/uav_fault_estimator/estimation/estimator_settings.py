@@ -81,13 +81,19 @@ class EstimatorSettings:
     arrival_centre: str = setting(
         "where the arrival cost is centred: filter (the arrival filter's mean) or "
         "previous_window (the previous window's estimate, as the paper)", "filter")
-    # off: with air data the wind errors only add weakly observable columns (measured:
-    # fault-free largest estimate 1.73 vs 0.57 %, docs/estimator.md)
+    # off by default: with vanes the columns are 0 and only cost solve time (2.9 against
+    # 0.6 ms median on the default flight, docs/estimator.md); on for a pitot without vanes
     estimate_wind_errors: bool = setting(
-        "also estimate the wind-estimate errors (S columns *_error of residual_node) as "
-        "random-walk nuisance parameters", False)
+        "also estimate the errors of the wind the models flew (S columns *_error of "
+        "residual_node; 0 where vanes measure the flow) as unknowns of the window, "
+        "Gauss-Markov processes: on for an aircraft without vanes", False)
     wind_error_sigma_mps: float = setting(
-        "random-walk step of each wind error per residual sample [m/s]", 0.2, 1e-4, 10.0)
+        "Gauss-Markov step of each wind error per residual sample [m/s]", 0.2, 1e-4, 10.0)
+    # 0.95 per 0.5 s: a correlation time of 10 s, the filtered wind's time constant, whose
+    # misses the wind errors are
+    wind_error_coefficient: float = setting(
+        "a in e(t+1) = a e(t) + gamma of each wind error: exp(-period / correlation time)",
+        0.95, 0.0, 1.0)
     wind_error_handover_variance_m2ps2: float = setting(
         "R of eq. 17 for each wind error [m^2/s^2]", 1.0, 1e-6, 1e4, live=True)
     # active_set: about half ProxSuite's update time (docs/results.md)
@@ -160,7 +166,8 @@ def config_from_settings(settings: EstimatorSettings,
     handover = list(s.handover_variances_pct2)
     floor = list(s.arrival_floor_variances_pct2)
     if s.estimate_wind_errors:  # nuisance parameters: random walks [m/s]
-        faults += [FaultConfig(name, "random_walk", {"sigma": s.wind_error_sigma_mps})
+        faults += [FaultConfig(name, "random_walk", {"sigma": s.wind_error_sigma_mps,
+                                                     "coefficient": s.wind_error_coefficient})
                    for name in WIND_ERROR_NAMES]
         handover += [s.wind_error_handover_variance_m2ps2] * len(WIND_ERROR_NAMES)
         floor += [0.0] * len(WIND_ERROR_NAMES)

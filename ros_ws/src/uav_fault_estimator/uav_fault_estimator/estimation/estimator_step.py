@@ -32,7 +32,7 @@ from uav_fault_estimator.estimation.noise_model import (
     SuiteNoise,
     load_noise_calibration,
 )
-from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS
+from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_ERROR_NAMES
 
 # The estimator has settled this long [s of sim time] after the first residual: errors are
 # judged from here (metrics.json's settle_s), and model_fit first judges a window this long.
@@ -76,7 +76,8 @@ def warm_up_text(config: EstimatorConfig) -> str:
     """What the first estimates are, in one line (mhe_node says it at start, so that a
     flight in real time does not look stuck): the prior until the residuals are valid, and
     meaningful from SETTLE_S of simulation time on."""
-    prior = ", ".join(f"{value:g}" for value in config.prior_pct)
+    faults = sum(fault.name not in WIND_ERROR_NAMES for fault in config.faults)
+    prior = ", ".join(f"{value:g}" for value in config.prior_pct[:faults])
     return (f"the estimates are the prior ({prior} %) until the residuals are valid "
             f"(residual_node's recovery_s after the start), and meaningful from {SETTLE_S:g} s "
             f"of simulation time on (settled; the window holds the last {config.horizon} "
@@ -131,12 +132,15 @@ class EstimatorStep:
         """A gap of gap_s [s] in the samples: the window moves on by the samples missed."""
         self.estimator.advance(missing_samples(gap_s, self.window_stamps_s))
 
-    def columns(self, sample: ResidualInput) -> list[int]:
-        """Indices of the estimated columns among the sample's; RejectedSampleError saying why
-        when a column is absent, S's size does not match its names, the suite is unknown or
-        the filter time constant is not a time."""
+    def columns(self, sample: ResidualInput) -> list[int | None]:
+        """Indices of the estimated columns among the sample's (None for a wind error the
+        residuals do not carry: a source that computes none says nothing of them, as vanes
+        do); RejectedSampleError saying why when a fault's column is absent, S's size does
+        not match its names, the suite is unknown or the filter time constant is not a
+        time."""
         offered = list(sample.column_names)
-        missing = [name for name in self.estimated_names if name not in offered]
+        missing = [name for name in self.estimated_names
+                   if name not in offered and name not in WIND_ERROR_NAMES]
         if missing:
             raise RejectedSampleError(f"residuals lack the columns {missing}")
         if np.size(sample.sensitivity) != len(RESIDUAL_CHANNELS) * len(offered):
@@ -146,16 +150,21 @@ class EstimatorStep:
             raise RejectedSampleError(f"unknown wind_source {sample.wind_source}")
         if not (math.isfinite(sample.tau_a_s) and sample.tau_a_s >= 0):
             raise RejectedSampleError(f"filter time constant {sample.tau_a_s} s")
-        return [offered.index(name) for name in self.estimated_names]
+        return [offered.index(name) if name in offered else None
+                for name in self.estimated_names]
 
     def update(self, sample: ResidualInput) -> StepResult:
         """One estimator update with the sample (RejectedSampleError, nothing changed, when it
         cannot be used), its model_fit verdict."""
         columns = self.columns(sample)
-        sensitivity = np.reshape(sample.sensitivity, (len(RESIDUAL_CHANNELS), -1))
+        offered = np.reshape(sample.sensitivity, (len(RESIDUAL_CHANNELS), -1))
+        sensitivity = np.zeros((len(RESIDUAL_CHANNELS), len(columns)))
+        for j, column in enumerate(columns):
+            if column is not None:
+                sensitivity[:, j] = offered[:, column]
         q_diag = self.noise.weigh(sample.time_s, sample.wind_source, sample.tau_a_s)
         estimate = self.estimator.hold() if q_diag is None else self.estimator.update(
-            np.asarray(sample.residual), sensitivity[:, columns], np.asarray(sample.valid),
+            np.asarray(sample.residual), sensitivity, np.asarray(sample.valid),
             q_diag)
         self.window_stamps_s.append(sample.time_s)
         published = estimate.columns(self.published_names)

@@ -37,7 +37,12 @@ from uav_fault_estimator.estimation.model_parameters import (
     model_parameter,
     values_of,
 )
-from uav_fault_estimator.estimation.noise_model import SUITES, NoiseCalibration, white_share
+from uav_fault_estimator.estimation.noise_model import (
+    SUITES,
+    NoiseCalibration,
+    white_share,
+    without_wind_errors,
+)
 from uav_fault_estimator.estimation.prediction import AircraftPredictor
 from uav_fault_estimator.estimation.qp_problem import sample_normal_equations
 from uav_fault_estimator.estimation.residual_sampling import ResidualSampler
@@ -45,6 +50,7 @@ from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import (
     WIND_AIR_DATA,
     WIND_FILTERED,
+    WIND_PITOT,
     ResidualGenerator,
     ResidualSample,
 )
@@ -121,16 +127,22 @@ class SuiteResiduals:
 def noise_residuals(flight: SensorFlight, model: FlownAircraft,
                     residual: ResidualSettings) -> SuiteResiduals:
     """The model's residuals per noise suite on the flight: the samples that flew the air
-    data, and the whole flight flown again on the filtered wind alone (the other suite's
-    noise from the same flight)."""
+    data, and the whole flight flown again on its pitot alone and on the filtered wind alone
+    (the other suites' noise from the same flight; the pitot's beyond its wind errors,
+    noise_model.without_wind_errors)."""
+    vanes_lost, all_lost = flight.air_data.copy(), np.full_like(flight.air_data, np.nan)
+    vanes_lost[:, 1:] = np.nan
     residuals, times = {}, {}
-    for suite, air_data in ((SUITES[WIND_AIR_DATA], flight.air_data),
-                            (SUITES[WIND_FILTERED], np.full_like(flight.air_data, np.nan))):
-        samples = [s for s in _grid_samples(_generator(model, (), residual), flight,
-                                            residual, air_data)
-                   if SUITES[s.wind_source] == suite]
-        residuals[suite] = np.array([s.residual for s in samples]).reshape(-1, 6)
-        times[suite] = np.array([s.time_s for s in samples])
+    for source, air_data in ((WIND_AIR_DATA, flight.air_data), (WIND_PITOT, vanes_lost),
+                             (WIND_FILTERED, all_lost)):
+        generator = _generator(model, (), residual, wind_errors=source == WIND_PITOT)
+        samples = [s for s in _grid_samples(generator, flight, residual, air_data)
+                   if s.wind_source == source]
+        rows = np.array([s.residual for s in samples]).reshape(-1, 6)
+        if source == WIND_PITOT and samples:
+            rows = without_wind_errors(rows, np.array([s.sensitivity for s in samples]))
+        residuals[SUITES[source]] = rows
+        times[SUITES[source]] = np.array([s.time_s for s in samples])
     return SuiteResiduals(residuals, times)
 
 
@@ -152,9 +164,10 @@ def _grid_samples(generator: ResidualGenerator, flight: SensorFlight,
 
 
 def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
-               residual: ResidualSettings) -> ResidualGenerator:
+               residual: ResidualSettings, wind_errors: bool = False) -> ResidualGenerator:
     """residual_node's generator with `model`'s copies, columns per parameter: a model copy
-    moved by the parameter's step, or for an air-data bias the bias moved by it."""
+    moved by the parameter's step, or for an air-data bias the bias moved by it; then the
+    wind errors' when wind_errors."""
     vehicle = load_vehicle(residual.vehicle)
     propeller = Propeller.from_vehicle(vehicle)
     copies = [q.name for q in parameters if not q.is_bias]
@@ -162,6 +175,7 @@ def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
         lambda changes: AircraftPredictor({}, vehicle, propeller, changed(model, changes)),
         copies, SCALE_STEP_PCT, residual.tau_a_s, residual.sensitivity_period_s,
         residual.recovery_s,
+        wind_error_step_mps=residual.wind_error_step_mps if wind_errors else 0.0,
         sensor_bias=model.sensor_bias,
         bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias},
         air_data_range=vehicle.air_data_range)

@@ -3,7 +3,10 @@ fault-free flights (scripts/calibrate_estimator.py writes its folder's residual_
 
 What the residuals carry without a fault is turbulence the models do not see plus sensor
 noise, both through F_a, so it depends on where the models' wind came from: the air data
-(Residuals.WIND_AIR_DATA) or the filtered wind (WIND_FILTERED). The calibration holds, per
+(Residuals.WIND_AIR_DATA), a pitot without vanes (WIND_PITOT) or the filtered wind
+(WIND_FILTERED). A pitot's samples are those of an estimator that takes the wind errors
+out as unknowns of its window: their calibration is of what the residuals carry beyond the
+wind errors' fit (without_wind_errors). The calibration holds, per
 suite, each residual channel's variance and one-step (0.5 s) correlation over the flights;
 the estimator's Q is the variance times `variance_factor`, one factor for both suites. The
 correlation after F_a (about exp(-0.5 / 4) = 0.88) means fewer independent samples than the
@@ -23,14 +26,20 @@ import yaml
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle
 from uav_common.strict_yaml import kind_mismatch
 
-from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_AIR_DATA, WIND_FILTERED
+from uav_fault_estimator.estimation.residuals import (
+    RESIDUAL_CHANNELS,
+    WIND_AIR_DATA,
+    WIND_FILTERED,
+    WIND_PITOT,
+)
 
-SUITES = {WIND_AIR_DATA: "air_data", WIND_FILTERED: "filtered_wind"}
+SUITES = {WIND_AIR_DATA: "air_data", WIND_PITOT: "pitot", WIND_FILTERED: "filtered_wind"}
 # What a noise calibration file is, for the line that refuses a file of another kind
 NOISE_CALIBRATION = ("a noise calibration (scripts/calibrate_estimator.py's file, a vehicle's "
                      "residual_noise.yaml)")
-# suite name -> whether the aircraft has air data on board (scenario sensors.air_data)
-AIR_DATA_ON_BOARD = {suite: source == WIND_AIR_DATA for source, suite in SUITES.items()}
+# suite name -> what the aircraft has on board: (a pitot, vanes) (scenario sensors.air_data,
+# sensors.vanes)
+SUITE_SENSORS = {"air_data": (True, True), "pitot": (True, False), "filtered_wind": (False, False)}
 
 
 @dataclass(frozen=True)
@@ -57,7 +66,8 @@ class SuiteNoise:
     """Q per residual sample from its suite, or a hold.
 
     An aircraft without air data flies the filtered wind throughout: its samples get the
-    filtered-wind suite's Q. Where the air data has been flown and is lost, the filtered
+    filtered-wind suite's Q; one without vanes flies its pitot throughout, with the pitot
+    suite's. Where the air data has been flown and is lost (the vanes or all of it), the
     wind's gust error is no white noise: its one-step correlation is about 0.99, so over a
     30 s loss it reads as a slowly changing fault whatever its Q (measured: 10 times Q, or
     the AR(1) white equivalent, still gave fault-free estimates of 3 %). Such samples are
@@ -83,7 +93,7 @@ class SuiteNoise:
         """Q (6,) of the residual sample at time_s [s] whose newest model flew wind_source,
         filtered with F_a of time constant tau_a_s [s]; None when the estimator is to hold
         instead: the air data lost, or back for less than HOLD_AFTER_TAU_A times tau_a_s."""
-        if wind_source == WIND_FILTERED:
+        if wind_source != WIND_AIR_DATA:
             self.last_filtered_s = time_s
             if self.air_data_flown:
                 return None
@@ -93,6 +103,21 @@ class SuiteNoise:
         else:
             self.air_data_flown = True
         return self.calibration.q_diag(wind_source, self.variance_factor)
+
+
+def without_wind_errors(residuals: np.ndarray, wind_sensitivity: np.ndarray) -> np.ndarray:
+    """What fault-free residuals carry beyond the wind errors (K, 6): each sample (K, 6)
+    less its least-squares fit by the wind-error columns of S (K, 6, w), rows weighted by
+    the inverse of their mean squares, and scaled by sqrt(6 / (6 - r)), r the fit's rank,
+    so that its mean square estimates the variance without the bias of the r degrees of
+    freedom the fit takes."""
+    weight = 1.0 / np.sqrt(np.mean(residuals**2, axis=0))
+    left = np.empty_like(residuals)
+    for k, (y, s) in enumerate(zip(residuals, wind_sensitivity, strict=True)):
+        whitened_s = weight[:, None] * s
+        fit, _, rank, _ = np.linalg.lstsq(whitened_s, weight * y, rcond=1e-6)
+        left[k] = (y - s @ fit) * np.sqrt(y.size / (y.size - rank))
+    return left
 
 
 def white_share(correlations: np.ndarray) -> np.ndarray:

@@ -36,7 +36,7 @@ class ResidualSettings:
         "rows stay invalid this long after the start and after a missing channel is "
         "back (3 tau_a) [s]", 12.0, 0.0, 600.0)
     wind_error_step_mps: float = setting(
-        "secant step of the wind-error columns of S; 0: none [m/s]", 0.0, 0.0, 10.0)
+        "secant step of the wind-error columns of S; 0: none [m/s]", 1.0, 0.0, 10.0)
     engine_speed_measured: bool = setting(
         "the state's engine speed is measured; false: the models turn the propeller at the "
         "speed where it absorbs the engine's power at the throttle (an autopilot that "

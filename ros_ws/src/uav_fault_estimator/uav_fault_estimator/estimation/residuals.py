@@ -15,16 +15,20 @@ S_raw f, then y = F_a (a_raw - phi(x | 0)) ~= F_a (S_raw f) = (F_a S_raw) f for 
 changing f, so the S for which y ~= S f holds is the filtered one.
 
 Optionally S gets three more columns, the wind-estimate errors (WIND_ERROR_NAMES): the
-model with the filtered wind shifted by a step along north, east or down, differenced the
+model with the wind it flew shifted by a step along north, east or down, differenced the
 same way. Gusts the 10 s filtered wind misses are the largest part of the residual in
-turbulence; with these columns an estimator can take them out as nuisance parameters.
+turbulence; with these columns an estimator takes them out as unknowns of its window.
 
 Air data: given measured airspeed, alpha and beta (uav_sim's AirData), the models fly the
 measured air-relative velocity instead of C_bn (v - w_hat): the wind they get is the wind
-triangle v - C_nb V(alpha, beta), which gives exactly that air velocity in body axes. A
-sample whose air data is missing, non-finite or outside the range the aircraft model holds
-for (the vehicle's air_data_range) falls back to the filtered wind; each sample says which it flew
-(wind_source).
+triangle v - C_nb V(alpha, beta), which gives exactly that air velocity in body axes; the
+vanes measure the flow, so the wind-error columns are 0. With a pitot and no vanes (the
+angles NaN), they fly the pitot's airspeed along the air velocity of the filtered wind's
+triangle (pitot_wind_ned_mps), and so does each wind-error column: the pitot measures the
+gust along the air velocity, and the columns carry the two across it, which make the flow
+angles. A sample whose air data is missing, non-finite or outside the range the aircraft
+model holds for (the vehicle's air_data_range) falls back to the filtered wind; each sample
+says which it flew (wind_source).
 
 Frames: the model gives dv/dt of v = (NED ground velocity, body rates), so the linear rows
 are filtered in NED. The output expresses them in body axes (x forward, y right, z down),
@@ -43,7 +47,7 @@ import numpy as np
 from uav_aircraft.flown_aircraft import NO_BIAS, SensorBias, true_air_data
 from uav_aircraft.frames import ned_to_body, wind_triangle_ned_mps
 from uav_aircraft.vehicles import AirDataRange
-from uav_common.channels import STATE_CHANNELS, state_indices
+from uav_common.channels import AIR_DATA_CHANNELS, STATE_CHANNELS, state_indices
 from uav_common.filters import LowPass, SettlingLowPass
 from uav_common.sample_grid import GRID_TOLERANCE_S
 
@@ -91,8 +95,11 @@ ROW_NEEDS: tuple[frozenset[str], ...] = (
 BRIDGED_GAP_S = 0.2
 
 
-# Where the models' wind came from (Residuals.WIND_FILTERED, Residuals.WIND_AIR_DATA).
-WIND_FILTERED, WIND_AIR_DATA = 0, 1
+# Where the models' wind came from (Residuals.WIND_FILTERED, WIND_AIR_DATA, WIND_PITOT).
+WIND_FILTERED, WIND_AIR_DATA, WIND_PITOT = 0, 1, 2
+WIND_SOURCE_NAMES = {WIND_FILTERED: "filtered wind", WIND_AIR_DATA: "air data",
+                     WIND_PITOT: "pitot"}
+_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
 def air_data_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | None) -> bool:
@@ -105,9 +112,27 @@ def air_data_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | 
         low <= value <= high for value, (low, high) in zip(air_data, air_data_range, strict=True))
 
 
-# Columns of S beyond the faults: the error of the filtered wind estimate, w - w_hat [m/s].
-# Turbulence reaches the residuals through it: y ~= S_f f + S_w (w - w_hat), so an
-# estimator may carry it as a nuisance parameter.
+def pitot_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | None) -> bool:
+    """Whether a measured air data's airspeed [m/s] alone is finite and within the model's
+    airspeed range (air_data_usable's, for the airspeed)."""
+    if air_data is None or not np.isfinite(air_data[_AIRSPEED]):
+        return False
+    low, high = (-math.inf, math.inf) if air_data_range is None else air_data_range[_AIRSPEED]
+    return bool(low <= air_data[_AIRSPEED] <= high)
+
+
+def pitot_wind_ned_mps(velocity_ned_mps: np.ndarray, wind_ned_mps: np.ndarray,
+                       airspeed_mps: float) -> np.ndarray:
+    """The wind [m/s, NED] whose triangle gives the air velocity v - wind_ned_mps the
+    measured airspeed [m/s] and keeps its direction: the pitot measures the magnitude, the
+    wind estimate the rest."""
+    air_velocity_mps = velocity_ned_mps - wind_ned_mps
+    return velocity_ned_mps - air_velocity_mps * (airspeed_mps / np.linalg.norm(air_velocity_mps))
+
+
+# Columns of S beyond the faults: the error of the wind the models flew, w - w_flown [m/s].
+# Turbulence reaches the residuals through it: y ~= S_f f + S_w (w - w_flown), so an
+# estimator carries it as an unknown of its window.
 WIND_ERROR_NAMES = ("wind_north_error", "wind_east_error", "wind_down_error")
 
 
@@ -133,7 +158,8 @@ class ResidualSample:
     predicted: np.ndarray     # (6,) a_hat
     sensitivity: np.ndarray   # (6, columns) S [row unit per % of fault, or per m/s of wind]
     valid: np.ndarray         # (6,) bool: the row's needed channels were all present
-    wind_source: int          # WIND_AIR_DATA or WIND_FILTERED: what the newest sample flew
+    wind_source: int          # WIND_AIR_DATA, WIND_PITOT or WIND_FILTERED: what the newest
+                              # sample flew
 
 
 class ResidualGenerator:
@@ -165,7 +191,7 @@ class ResidualGenerator:
     ) -> None:
         """sensor_bias: the air-data bias taken out of measured air data; bias_steps:
         SensorBias field -> secant step (its unit) for a column of S per bias, named by the
-        field (0 on samples that fly the filtered wind); air_data_range: the air data the
+        field (0 on samples that fly no vanes); air_data_range: the air data the
         models may fly (air_data_usable; the vehicle's); unmeasured: state channels the
         aircraft does not measure and its models do without (engine_speed, when they turn
         the propeller at its steady speed): never missing, never needed."""
@@ -229,18 +255,33 @@ class ResidualGenerator:
         self.wind_source = WIND_FILTERED
         self.latest: ResidualSample | None = None
 
+    def _column_wind(self, column: _Column, state: np.ndarray, wind: np.ndarray,
+                     air_data: np.ndarray | None) -> np.ndarray | None:
+        """The wind [m/s, NED] column's model flies, or None for a column that is 0 here (a
+        wind error where the vanes measure the flow; a bias where no air data is flown)."""
+        if column.sensor_bias is not None:
+            return (_air_data_wind(state, air_data, column.sensor_bias)
+                    if self.wind_source == WIND_AIR_DATA else None)
+        if not column.wind_shift_mps.any():
+            return wind
+        if self.wind_source == WIND_AIR_DATA:
+            return None
+        shifted = wind + column.wind_shift_mps
+        return (pitot_wind_ned_mps(state[VELOCITY[:3]], shifted, air_data[_AIRSPEED])
+                if self.wind_source == WIND_PITOT else shifted)
+
     def _prediction(self, state: np.ndarray, controls: np.ndarray, wind: np.ndarray,
                     time_s: float, air_data: np.ndarray | None) -> np.ndarray:
         """P = [phi(x|0), S_raw] (6, 1 + columns); S_raw recomputed when its period is due.
-        air_data: the measured air data the models fly, None when they fly the filtered
-        wind."""
+        wind: the wind the models fly (of self.wind_source); air_data: the measured air
+        data, None where the models fly the filtered wind alone."""
         nominal = np.asarray(self.nominal(state, controls, wind), dtype=float)
         if time_s >= self.next_sensitivity_s or self.raw_sensitivity is None:
             self.raw_sensitivity = np.zeros((6, len(self.columns)))
             for j, column in enumerate(self.columns):
-                column_wind = wind + column.wind_shift_mps
-                if column.sensor_bias is not None and air_data is not None:
-                    column_wind = _air_data_wind(state, air_data, column.sensor_bias)
+                column_wind = self._column_wind(column, state, wind, air_data)
+                if column_wind is None:
+                    continue
                 shifted = column.model(state, controls, column_wind)
                 self.raw_sensitivity[:, j] = (np.asarray(shifted) - nominal) / column.step
             self.next_sensitivity_s = time_s + self.sensitivity_period_s
@@ -275,7 +316,9 @@ class ResidualGenerator:
         """Process one sensor sample; the residuals at time_s, or None before any is formed.
 
         air_data (3,): measured true airspeed [m/s], alpha, beta [rad], or None; when usable
-        (air_data_usable) the models fly it instead of the filtered wind wind_ned_mps.
+        (air_data_usable) the models fly it instead of the filtered wind wind_ned_mps; when
+        only its airspeed is (pitot_usable), the pitot's airspeed on the filtered wind's
+        triangle.
         Within a bridged gap (BRIDGED_GAP_S) the residuals are the last complete sample's,
         stamped time_s.
         Raises ValueError for a time that does not increase (call reset() first), and for a sample
@@ -303,6 +346,9 @@ class ResidualGenerator:
         if air_data_usable(air_data, self.air_data_range):
             wind = _air_data_wind(state, air_data, self.sensor_bias)
             self.wind_source = WIND_AIR_DATA
+        elif pitot_usable(air_data, self.air_data_range):
+            wind = pitot_wind_ned_mps(state[VELOCITY[:3]], wind, air_data[_AIRSPEED])
+            self.wind_source = WIND_PITOT
         else:
             air_data = None
         prediction = self._prediction(state, self.held_inputs["controls"], wind, time_s,

@@ -48,6 +48,8 @@ from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import (
     RESIDUAL_CHANNELS,
     WIND_AIR_DATA,
+    WIND_FILTERED,
+    WIND_SOURCE_NAMES,
     ResidualSample,
 )
 
@@ -110,7 +112,7 @@ class ResidualNode(Node):
             self.core_time_s += time.perf_counter() - started
         self.counts["samples"] += 1
         newest = self.sampler.newest
-        if newest is not None and newest.wind_source != WIND_AIR_DATA:
+        if newest is not None and newest.wind_source == WIND_FILTERED:
             self.counts["filtered_wind_samples"] += 1
         if sample is None:
             return
@@ -148,13 +150,15 @@ class ResidualNode(Node):
     def report(self, sample: ResidualSample) -> None:
         invalid = [name for name, ok in zip(RESIDUAL_CHANNELS, sample.valid, strict=True)
                    if not ok]
-        source = "air data" if sample.wind_source == WIND_AIR_DATA else "filtered wind"
+        source = WIND_SOURCE_NAMES[sample.wind_source]
         problems = []
         if invalid:
             problems.append("rows invalid (a state channel is missing or implausible): "
                             + ", ".join(invalid))
         if sample.wind_source != WIND_AIR_DATA and self.streams.has_publisher("air_data"):
-            problems.append("no usable air data: the models fly the filtered wind")
+            problems.append("no usable air data: the models fly the filtered wind"
+                            if sample.wind_source == WIND_FILTERED else
+                            "no usable flow angles: the models fly the pitot without vanes")
         self.diagnostics.update(
             WARN if problems else OK, "; ".join(problems) or f"residuals valid ({source})",
             {**self.health(), "invalid_rows": ",".join(invalid) or "none",
