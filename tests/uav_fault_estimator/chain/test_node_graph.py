@@ -123,3 +123,25 @@ def test_the_link_listener_takes_its_vehicle_and_the_parameter_file(vehicle):
     assert args[:2] == ["--params-file", "/p.yaml"] and f"vehicle:={vehicle}" in args
     assert not any(arg.startswith("fuel_mass_kg") for node_args in plan.values()
                    for arg in node_args)
+
+
+@pytest.mark.timeout(30)
+def test_behind_a_link_or_without_vanes_the_estimator_takes_the_wind_errors(tmp_path):
+    """A link carries a pitot and no vanes, and so does a scenario saying so: mhe_node then
+    estimates the wind errors; with vanes it keeps its default."""
+    wind_errors = ["-p", "estimate_wind_errors:=true"]
+
+    def mhe_args(plan) -> list[str]:
+        return next(node.ros_args for node in plan if node.executable == "mhe_node")
+
+    def has(args: list[str], wanted: list[str]) -> bool:
+        return any(args[i:i + 2] == wanted for i in range(len(args) - 1))
+
+    vaneless = tmp_path / "vaneless.yaml"
+    vaneless.write_text(A.read_text().replace("sensors: {air_data: true, noise: true}",
+                                              "sensors: {air_data: true, noise: true, "
+                                              "vanes: false}"))
+    assert "vanes: false" in vaneless.read_text()
+    assert has(mhe_args(live_plan([], mavlink="udpin:127.0.0.1:14550")), wind_errors)
+    assert has(mhe_args(live_plan([vaneless])), wind_errors)
+    assert not has(mhe_args(live_plan([A])), wind_errors)

@@ -76,6 +76,7 @@ from uav_common.ros_processes import (
 from uav_sim.scenario import Scenario, ScenarioError, default_scenario_path, load_scenario
 
 from uav_fault_estimator.chain import node_graph
+from uav_fault_estimator.estimation.estimator_settings import sensor_overrides
 from uav_fault_estimator.estimation.model_file import ModelCalibrationError
 from uav_fault_estimator.nodes.mhe_node import PARAMETERS as MHE_PARAMETERS
 from uav_fault_estimator.reporting import targets
@@ -494,14 +495,16 @@ def check_one_clock(scenarios: list[Scenario]) -> None:
             "vehicles fly on one clock, so their scenarios must last as long")
 
 
-def mhe_overrides(scenario: Scenario) -> dict[str, Any]:
-    """The scenario's `estimator:` overrides of mhe_node's parameters; ScenarioError for a
-    parameter mhe_node does not have. Integers given for real parameters become reals
-    (ROS parameters do not convert)."""
-    if not scenario.estimator:
-        return {}
+def mhe_overrides(scenario: Scenario, through_link: bool = False) -> dict[str, Any]:
+    """What the scenario's aircraft calls for of mhe_node's parameters beyond their
+    defaults: what its sensors do (estimator_settings.sensor_overrides; through_link: the
+    sensors a MAVLink link carries, a pitot without vanes), then its `estimator:` overrides;
+    ScenarioError for a parameter mhe_node does not have. Integers given for real
+    parameters become reals (ROS parameters do not convert)."""
+    air_data, vanes = (True, False) if through_link else (scenario.sensors.air_data,
+                                                           scenario.sensors.vanes)
     defaults = {name: spec.default for name, spec in MHE_PARAMETERS.items()}
-    overrides = {}
+    overrides: dict[str, Any] = sensor_overrides(air_data, vanes)
     for name, value in scenario.estimator.items():
         if name not in defaults:
             raise ScenarioError(
@@ -559,7 +562,8 @@ def main(runs_dir: Path) -> int:
     try:
         scenarios = [replace(scenario, path=scenario.path.resolve()) for scenario in
                      map(load_scenario, arguments.scenarios or [default_scenario_path()])]
-        overrides = [mhe_overrides(scenario) for scenario in scenarios]
+        overrides = [mhe_overrides(scenario, bool(arguments.via_mavlink))
+                     for scenario in scenarios]
         if arguments.via_mavlink and len(scenarios) > 1:
             raise ScenarioError("--via-mavlink flies one scenario through one link")
         if arguments.duration is None:

@@ -27,8 +27,9 @@ from pathlib import Path
 
 from uav_aircraft.vehicles import DEFAULT_VEHICLE, load_vehicle, vehicle_names
 from uav_common.ros_processes import NO_LOG_FILE_ROS_ARGS, SIM_TIME_ROS_ARGS
-from uav_sim.scenario import load_scenario
+from uav_sim.scenario import SensorSuite, load_scenario
 
+from uav_fault_estimator.estimation.estimator_settings import sensor_overrides
 from uav_fault_estimator.estimation.model_file import load_model_calibration
 
 SIMULATOR, LISTENER, AUTOPILOT = "sim_node", "mavlink_node", "autopilot_node"
@@ -101,6 +102,13 @@ def scenario_vehicles(scenarios: Sequence[Path]) -> list[str]:
     return [load_scenario(path).vehicle for path in scenarios] or [DEFAULT_VEHICLE]
 
 
+def scenario_sensors(scenarios: Sequence[Path]) -> list[tuple[bool, bool]]:
+    """Each scenario's aircraft's sensors, (air data, vanes); the default scenario's without
+    any. ScenarioError for a scenario that cannot be read."""
+    suites = [load_scenario(path).sensors for path in scenarios] or [SensorSuite()]
+    return [(suite.air_data, suite.vanes) for suite in suites]
+
+
 def node_ros_args(executable: str, namespace: str, clock_leader: bool,
                   calibration: ModelCalibrationFiles | None = None,
                   vehicle: str = DEFAULT_VEHICLE) -> list[str]:
@@ -146,6 +154,15 @@ def played_autopilot_ros_args(executable: str, stack: str, port: int,
     raise ValueError(f"{executable} is not one of the link's nodes")
 
 
+def sensor_ros_args(executable: str, air_data: bool, vanes: bool) -> list[str]:
+    """mhe_node's ROS arguments for an aircraft's sensors (estimator_settings.
+    sensor_overrides); none for the other nodes."""
+    if executable != "mhe_node":
+        return []
+    return [arg for name, value in sensor_overrides(air_data, vanes).items()
+            for arg in ("-p", f"{name}:={str(value).lower()}")]
+
+
 def link_residual_ros_args(stack: str) -> list[str]:
     """residual_node's ROS arguments behind a stack's link: PX4 streams no engine speed, so
     the models turn the propeller at its steady speed."""
@@ -186,6 +203,8 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
     namespaces = vehicle_namespaces(max(len(scenarios), 1), namespace)
     common = ["--params-file", str(params)] if params else []
     vehicles = [vehicle] if mavlink else scenario_vehicles(scenarios)
+    # a link carries a pitot's airspeed and no vanes
+    sensors = [(True, False)] if mavlink else scenario_sensors(scenarios)
     plan = []
     for index in reversed(range(len(namespaces))):
         namespace = namespaces[index]
@@ -196,6 +215,7 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
                                             vehicles[index])]
             if executable == SIMULATOR and scenarios:
                 args += ["-p", f"scenario:={scenarios[index]}"]
+            args += sensor_ros_args(executable, *sensors[index])
             if executable == LISTENER:
                 args += ["-p", f"connection:={mavlink}", "-p", "publish_clock:=true"]
             key = node_key(namespace if len(namespaces) > 1 else "", executable)

@@ -22,7 +22,10 @@ from uav_sim.simulation import Simulation
 
 from uav_fault_estimator.campaigns.campaign import Campaign
 from uav_fault_estimator.detection.detector import DetectorFlight
-from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
+from uav_fault_estimator.estimation.estimator_settings import (
+    EstimatorSettings,
+    sensor_overrides,
+)
 from uav_fault_estimator.estimation.estimator_step import EstimatorStep, ResidualInput
 from uav_fault_estimator.estimation.model_calibration import SensorFlight
 from uav_fault_estimator.estimation.noise_model import without_wind_errors
@@ -46,7 +49,8 @@ def fly_and_estimate(
     The residual generator's settings are `residual` (default: residual_node's, for the
     scenario's vehicle), the estimator's `estimator` (default: mhe_node's, for the
     scenario's vehicle and with the scenario's `estimator` overrides, of which mhe_node's
-    own parameters, such as qos, have no part here). Returns the published estimates
+    own parameters, such as qos, have no part here, and with what its sensors call for,
+    estimator_settings.sensor_overrides). Returns the published estimates
     (what mhe_node would publish; solve times are the estimator's update times) and the
     seeded faults sampled at the same stamps. The models fly the air data where the
     aircraft has it, as residual_node does. true_wind: the models get the true wind
@@ -55,8 +59,10 @@ def fly_and_estimate(
     calibration's), as residual_node's model_calibration_file gives it.
     """
     sampler = residual_sampler(residual or ResidualSettings(vehicle=scenario.vehicle), model)
-    step = EstimatorStep(estimator or settings_from(
-        EstimatorSettings, {"vehicle": scenario.vehicle, **scenario.estimator}))
+    sensors = scenario.sensors
+    step = EstimatorStep(estimator or settings_from(EstimatorSettings, {
+        "vehicle": scenario.vehicle, **sensor_overrides(sensors.air_data, sensors.vanes),
+        **scenario.estimator}))
     simulation = Simulation(scenario)
     stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
     sample = simulation.sample()
@@ -67,7 +73,7 @@ def fly_and_estimate(
         if result is not None:
             estimate = step.update(ResidualInput(
                 sample.time_s, result.residual, result.valid, result.sensitivity,
-                sampler.generator.column_names, result.wind_source, sampler.generator.tau_a_s))
+                sampler.generator.column_names, result.wind_source, result.tau_a_s))
             stamps.append(sample.time_s)
             values.append(estimate.published_pct)
             statuses.append(int(estimate.estimate.status))

@@ -129,6 +129,13 @@ SCALE_PARAMETER: dict[str, str | None] = {
 }
 
 
+def sensor_overrides(air_data: bool, vanes: bool) -> dict[str, object]:
+    """mhe_node's parameters, beyond their defaults, that an aircraft's sensors call for:
+    with a pitot and no vanes (any MAVLink link) the wind errors are unknowns of the window
+    (docs/estimator.md)."""
+    return {"estimate_wind_errors": True} if air_data and not vanes else {}
+
+
 def config_from_settings(settings: EstimatorSettings,
                          noise: NoiseCalibration) -> EstimatorConfig:
     """The estimator's configuration from its settings and the noise calibration they name

@@ -178,7 +178,7 @@ def _generator(model: FlownAircraft, parameters: Sequence[ModelParameter],
         wind_error_step_mps=residual.wind_error_step_mps if wind_errors else 0.0,
         sensor_bias=model.sensor_bias,
         bias_steps={q.name: q.step * q.native_per_unit for q in parameters if q.is_bias},
-        air_data_range=vehicle.air_data_range)
+        air_data_range=vehicle.air_data_range, tau_a_pitot_s=residual.tau_a_pitot_s)
 
 
 def _column_per_unit(parameter: ModelParameter) -> float:

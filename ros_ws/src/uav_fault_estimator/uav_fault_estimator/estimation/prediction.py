@@ -193,6 +193,7 @@ def residual_generator(settings: ResidualSettings,
         settings.recovery_s, settings.wind_error_step_mps, model.sensor_bias,
         air_data_range=vehicle.air_data_range,
         unmeasured=frozenset({"engine_speed"} if steady_engine_speed else ()),
+        tau_a_pitot_s=settings.tau_a_pitot_s,
     )
 
 

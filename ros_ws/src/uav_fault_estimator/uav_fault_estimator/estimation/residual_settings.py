@@ -28,6 +28,9 @@ class ResidualSettings:
     tau_a_s: float = setting(
         "time constant of the smoothing filter F_a, eq. 5-6 (the paper's 4 s) [s]", 4.0, 0.1,
         100.0)
+    tau_a_pitot_s: float = setting(
+        "time constant of F_a on the samples whose models fly a pitot without vanes: short, "
+        "so that one wind error per sample carries the gusts through it [s]", 1.0, 0.1, 100.0)
     update_period_s: float = setting(
         "residuals are published every this much simulation time [s]", 0.5, 0.01, 60.0)
     sensitivity_period_s: float = setting(

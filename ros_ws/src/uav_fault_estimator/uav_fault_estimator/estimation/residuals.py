@@ -26,9 +26,14 @@ vanes measure the flow, so the wind-error columns are 0. With a pitot and no van
 angles NaN), they fly the pitot's airspeed along the air velocity of the filtered wind's
 triangle (pitot_wind_ned_mps), and so does each wind-error column: the pitot measures the
 gust along the air velocity, and the columns carry the two across it, which make the flow
-angles. A sample whose air data is missing, non-finite or outside the range the aircraft
-model holds for (the vehicle's air_data_range) falls back to the filtered wind; each sample
-says which it flew (wind_source).
+angles. On those samples F_a's time constant is tau_a_pitot_s, short (1 s): through a 4 s
+F_a the gusts of several seconds and the turns within them mix, so that no single wind
+error per sample explains what they leave in the residuals (measured on a fault-free
+flight, the true gust's mean over each sample: what it leaves is 0.8-3.7 times each row's
+residual with the true wind flown when F_a is 4 s, 0.2-0.8 times when it is 1 s). A sample
+whose air data is missing, non-finite or outside the range the aircraft model holds for
+(the vehicle's air_data_range) falls back to the filtered wind; each sample says which it
+flew (wind_source).
 
 Frames: the model gives dv/dt of v = (NED ground velocity, body rates), so the linear rows
 are filtered in NED. The output expresses them in body axes (x forward, y right, z down),
@@ -158,6 +163,7 @@ class ResidualSample:
     predicted: np.ndarray     # (6,) a_hat
     sensitivity: np.ndarray   # (6, columns) S [row unit per % of fault, or per m/s of wind]
     valid: np.ndarray         # (6,) bool: the row's needed channels were all present
+    tau_a_s: float            # F_a's time constant on the newest sample [s]
     wind_source: int          # WIND_AIR_DATA, WIND_PITOT or WIND_FILTERED: what the newest
                               # sample flew
 
@@ -188,13 +194,15 @@ class ResidualGenerator:
         bias_steps: Mapping[str, float] | None = None,
         air_data_range: AirDataRange | None = None,
         unmeasured: frozenset[str] = frozenset(),
+        tau_a_pitot_s: float | None = None,
     ) -> None:
         """sensor_bias: the air-data bias taken out of measured air data; bias_steps:
         SensorBias field -> secant step (its unit) for a column of S per bias, named by the
         field (0 on samples that fly no vanes); air_data_range: the air data the
         models may fly (air_data_usable; the vehicle's); unmeasured: state channels the
         aircraft does not measure and its models do without (engine_speed, when they turn
-        the propeller at its steady speed): never missing, never needed."""
+        the propeller at its steady speed): never missing, never needed; tau_a_pitot_s:
+        F_a's time constant [s] on samples that fly a pitot without vanes (None: tau_a_s)."""
         if not secant_step_pct > 0:
             raise ValueError(f"secant step must be positive, got {secant_step_pct} %")
         if not wind_error_step_mps >= 0:
@@ -232,6 +240,7 @@ class ResidualGenerator:
         self.model_rebuilds = 0  # times the model copies gave NaN and were made anew
         self.column_names = tuple(column.name for column in self.columns)
         self.tau_a_s = tau_a_s  # F_a's time constant: how long a residual remembers a wind
+        self.tau_a_pitot_s = tau_a_s if tau_a_pitot_s is None else tau_a_pitot_s
         self.observed_filter = LowPass(tau_a_s)
         self.predicted_filter = LowPass(tau_a_s)
         self.fuel_filter = SettlingLowPass(FUEL_MASS_TAU_S)
@@ -351,6 +360,8 @@ class ResidualGenerator:
             self.wind_source = WIND_PITOT
         else:
             air_data = None
+        tau_s = self.tau_a_pitot_s if self.wind_source == WIND_PITOT else self.tau_a_s
+        self.observed_filter.tau_s = self.predicted_filter.tau_s = tau_s
         prediction = self._prediction(state, self.held_inputs["controls"], wind, time_s,
                                       air_data)
         velocity = state[VELOCITY]
@@ -400,6 +411,7 @@ class ResidualGenerator:
             predicted=predicted,
             sensitivity=predicted_and_s[:, 1:].copy(),
             valid=valid.copy(),
+            tau_a_s=self.observed_filter.tau_s,
             wind_source=self.wind_source,
         )
 

@@ -128,7 +128,7 @@ class ResidualNode(Node):
             predicted=sample.predicted.tolist(),
             valid=sample.valid.tolist(),
             wind_source=sample.wind_source,
-            filter_time_constant_s=self.generator.tau_a_s,
+            filter_time_constant_s=sample.tau_a_s,
             fault_names=list(self.generator.column_names),
             sensitivity=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
         )
