@@ -148,6 +148,27 @@ def detectability(data: Mapping[str, Any]) -> list[str]:
                           "worst delay [s]"), rows)
 
 
+# --- without vanes (studies/vaneless_bound.py) ----------------------------------------------
+
+
+def vaneless_bound(data: Mapping[str, Any]) -> list[str]:
+    lines = [f"The default scenario and {data.get('seeds')} fault-free flights per vehicle and "
+             f"sensors (seeds from {data.get('first_seed')}); after "
+             f"{number(data.get('settle_s'))} s; threshold {number(data.get('threshold_pct'))} "
+             "%. Bound: the Cramer-Rao deviation of a constant fault over one estimator "
+             "window (median over the fault-free flights' windows); RMS, delay, false alarm: "
+             "the default scenario; fault-free: the largest estimate and the worst RMS over "
+             "the fault-free flights (the steady state, to hold against the bound).", ""]
+    keys = ("bound_pct", "rmse_pct", "delay_s", "false_alarm", "fault_free_largest_pct",
+            "fault_free_rmse_pct")
+    rows = [(vehicle, suite, fault, *(figures.get(key) for key in keys))
+            for vehicle, suites in data.get("summary", {}).items()
+            for suite, faults in suites.items()
+            for fault, figures in faults.items()]
+    return lines + table(("vehicle", "sensors", "fault", "bound [%]", "RMS [%]", "delay [s]",
+                          "false alarm", "fault-free largest [%]", "fault-free RMS [%]"), rows)
+
+
 # --- the soak (benchmarks/soak.py) --------------------------------------------------------
 
 
@@ -518,6 +539,11 @@ SECTIONS = (
             "python -m studies.detectability --json docs/detectability.json", detectability,
             "Per sensor suite and turbulence, the default and fault_free scenarios flown "
             "through the offline chain with the node defaults (docs/estimator.md)."),
+    Section("Without vanes", "vaneless_bound.json",
+            "python -m studies.vaneless_bound --json docs/vaneless_bound.json", vaneless_bound,
+            "A pitot without vanes against vanes, each vehicle's default and fault-free "
+            "flights through the offline chain with the node defaults for those sensors, "
+            "beside the bound of what any estimator could do (docs/onboard.md)."),
     Section("Soak", "soak.json", "python -m benchmarks.soak --json docs/soak.json", soak,
             "A long flight replayed into a clean and a disturbed copy of the nodes, the "
             "disturbed one given bad messages (docs/performance.md)."),

@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""What a pitot without vanes costs the fault estimates, beside what the physics allows.
+
+    python -m studies.vaneless_bound [--seeds 3] [--json FILE]
+
+Per vehicle (aerosonde, carbon_z) and sensor suite (vanes; a pitot without them, the
+sensors a MAVLink link carries), flies the vehicle's default scenario and `--seeds`
+variants of its fault-free one (turbulence and noise seeds from 601, background winds of
+20-25 % of its airspeed: offline.fault_free_flights) through the offline chain with the
+nodes' defaults for those sensors, and prints per fault:
+
+- bound: the Cramer-Rao deviation of a constant fault over one window of the estimator
+  (fault_bound.window_fault_bound, the wind errors' Gauss-Markov model, the suite's
+  calibrated noise), median over the fault-free flights' windows after settle_s;
+- the default scenario's RMS error after settle_s, detection delay and false alarms;
+- the fault-free flights' largest estimate after settle_s and their RMS (the estimator's
+  steady-state error, to hold against the bound).
+
+Seeds other than the calibrations' (101-112, 201-212, 301-304) and the other studies'.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
+from uav_common.channels import PAPER_FAULT_NAMES
+from uav_common.settings import settings_from
+from uav_fault_estimator.campaigns.campaign import (
+    Campaign,
+    add_campaign_arguments,
+    campaign_options,
+    exit_on_failed_tasks,
+)
+from uav_fault_estimator.chain.offline import fault_free_flights, fly_and_estimate
+from uav_fault_estimator.estimation.estimator_settings import (
+    EstimatorSettings,
+    sensor_overrides,
+)
+from uav_fault_estimator.estimation.estimator_step import SETTLE_S
+from uav_fault_estimator.estimation.fault_bound import window_fault_bound
+from uav_fault_estimator.estimation.noise_model import SUITES, load_noise_calibration, white_share
+from uav_fault_estimator.estimation.prediction import residual_sampler
+from uav_fault_estimator.estimation.residual_settings import ResidualSettings
+from uav_fault_estimator.reporting.metrics import fault_metrics
+from uav_sim.scenario import Scenario, load_scenario, vehicle_scenario_path
+from uav_sim.simulation import Simulation
+
+VEHICLES = ("aerosonde", "carbon_z")
+SUITE_VANES = {"vanes": True, "pitot": False}  # the suites compared: air data with or without
+FIRST_SEED = 601
+WINDOW_STRIDE = 10  # samples between the windows whose bound is taken
+
+
+def with_vanes(scenario: Scenario, vanes: bool) -> Scenario:
+    """The scenario with its pitot, and vanes or not."""
+    return dataclasses.replace(scenario, sensors=dataclasses.replace(
+        scenario.sensors, air_data=True, vanes=vanes))
+
+
+def flight_bounds(scenario: Scenario) -> list[list[float]]:
+    """The bound (window_fault_bound) of each estimator window after SETTLE_S of the
+    fault-free flight, with the default residual and estimator settings for its sensors
+    (p per window) [%]."""
+    sensors = scenario.sensors
+    estimator = settings_from(EstimatorSettings, {
+        "vehicle": scenario.vehicle, **sensor_overrides(sensors.air_data, sensors.vanes)})
+    sampler = residual_sampler(ResidualSettings(vehicle=scenario.vehicle))
+    noise = load_noise_calibration("", scenario.vehicle)
+    simulation = Simulation(scenario)
+    sample, samples = simulation.sample(), []
+    while True:
+        result = sampler.update(sample.time_s, sample.state, sample.controls,
+                                sample.wind_filtered_ned_mps, sample.air_data)
+        if result is not None and result.valid.all() and result.time_s >= SETTLE_S:
+            samples.append(result)
+        if simulation.finished:
+            break
+        sample = simulation.step()
+    p, n = len(PAPER_FAULT_NAMES), estimator.horizon
+    wind_columns = slice(p, None) if estimator.estimate_wind_errors else slice(p, p)
+    bounds = []
+    for start in range(0, len(samples) - n + 1, WINDOW_STRIDE):
+        window = samples[start:start + n]
+        suite = SUITES[window[-1].wind_source]
+        variances = noise.variances[suite] / white_share(noise.correlations[suite])
+        sensitivity = np.array([s.sensitivity for s in window])
+        bounds.append(window_fault_bound(
+            sensitivity[:, :, :p], sensitivity[:, :, wind_columns], variances,
+            estimator.wind_error_sigma_mps, estimator.wind_error_coefficient).tolist())
+    return bounds
+
+
+def estimated(scenario: Scenario) -> dict:
+    """The offline chain's figures of the flight: per fault its metrics and largest
+    estimate after SETTLE_S, and the false alarms."""
+    estimates, seeded = fly_and_estimate(scenario)
+    faults, false_alarms = fault_metrics(estimates, seeded, SETTLE_S, THRESHOLD_PCT)
+    settled = estimates.stamps_s >= SETTLE_S
+    largest = estimates.values_pct[settled].max(axis=0)
+    return {"faults": {name: {**faults[name], "largest_pct": float(largest[j])}
+                       for j, name in enumerate(estimates.names)},
+            "false_alarms": false_alarms}
+
+
+def summarise(bounds: list, flights: list, seeds: int) -> dict:
+    """Per vehicle and suite, per fault: the bound, the default scenario's RMS, delay and
+    whether it false-alarmed, the fault-free flights' largest estimate and RMS. bounds: per
+    (vehicle, suite) its seeds fault-free flights'; flights: per (vehicle, suite) its
+    default scenario's, then its fault-free flights'."""
+    summary: dict = {}
+    cells = [(vehicle, suite) for vehicle in VEHICLES for suite in SUITE_VANES]
+    for k, (vehicle, suite) in enumerate(cells):
+        windows = np.concatenate([np.array(b) for b in bounds[k * seeds:(k + 1) * seeds]])
+        default, *free = flights[k * (seeds + 1):(k + 1) * (seeds + 1)]
+        summary.setdefault(vehicle, {})[suite] = {
+            name: {"bound_pct": round(float(np.median(windows[:, j])), 2),
+                   "rmse_pct": default["faults"][name]["rmse_pct"],
+                   "delay_s": default["faults"][name]["detection_delay_s"],
+                   "false_alarm": name in default["false_alarms"],
+                   "fault_free_largest_pct": round(max(
+                       f["faults"][name]["largest_pct"] for f in free), 2),
+                   "fault_free_rmse_pct": round(max(
+                       f["faults"][name]["rmse_pct"] for f in free), 2)}
+            for j, name in enumerate(PAPER_FAULT_NAMES)}
+    return summary
+
+
+def print_table(summary: dict) -> None:
+    print("| vehicle | sensors | bound [%] | rmse [%] | delay [s] | false alarms | "
+          "fault-free largest [%] | fault-free rmse [%] |")
+    print("|---|---|---|---|---|---|---|---|")
+    for vehicle, suites in summary.items():
+        for suite, faults in suites.items():
+            def column(key: str, form: str, entries: dict = faults) -> str:
+                return " / ".join("-" if v[key] is None else format(v[key], form)
+                                  for v in entries.values())
+            alarms = ", ".join(n for n, v in faults.items() if v["false_alarm"]) or "none"
+            print(f"| {vehicle} | {suite} | {column('bound_pct', '.2f')} | "
+                  f"{column('rmse_pct', '.2f')} | {column('delay_s', 'g')} | {alarms} | "
+                  f"{column('fault_free_largest_pct', '.2f')} | "
+                  f"{column('fault_free_rmse_pct', '.2f')} |")
+
+
+@exit_on_failed_tasks
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--json", type=Path, help="also write the summary here")
+    add_campaign_arguments(parser)
+    arguments = parser.parse_args()
+    started = time.monotonic()
+    free, flown = [], []
+    for vehicle in VEHICLES:
+        quiet = fault_free_flights(arguments.seeds, FIRST_SEED, vehicle=vehicle)
+        faulted = load_scenario(vehicle_scenario_path(vehicle, "default"))
+        for vanes in SUITE_VANES.values():
+            free += [with_vanes(s, vanes) for s in quiet]
+            flown += [with_vanes(faulted, vanes)] + [with_vanes(s, vanes) for s in quiet]
+    with Campaign(campaign_options(arguments)) as campaign:
+        bounds = campaign.results(flight_bounds, free, "bound flights")
+        flights = campaign.results(estimated, flown, "estimated flights")
+    summary = summarise(bounds, flights, arguments.seeds)
+    print_table(summary)
+    print(f"\n{len(free) + len(flown)} flights in {time.monotonic() - started:.0f} s")
+    if arguments.json:
+        arguments.json.write_text(json.dumps(
+            {"seeds": arguments.seeds, "first_seed": FIRST_SEED, "settle_s": SETTLE_S,
+             "threshold_pct": THRESHOLD_PCT, "summary": summary}, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
