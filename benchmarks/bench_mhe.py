@@ -6,8 +6,9 @@
 1. A realistic sequence: the default scenario flown by the core simulator (turbulence as
    given), its residuals and sensitivities from the residual core every 0.5 s, and
    mhe_node's default configuration (EstimatorSettings: N = 50, four monotonic faults
-   bounded to [0, 100] %), first with the four faults alone (p = 4), then with the three
-   wind-error columns as well (`estimate_wind_errors`, off by default). The project's
+   bounded to [0, 100] %), first with the four faults alone (p = 4), then, on the same
+   flight with a pitot and no vanes, with the three wind-error columns as well (the window
+   of an aircraft without vanes: `estimate_wind_errors`, the pitot suite's Q). The project's
    estimator runs it (the whole `update` call, as the node makes it); the same QPs then go,
    through the estimator's solver interface (solvers.WindowSolver), to the solvers of
    benchmarks/qp_solvers.py: PIQP (sparse, set up once, `update(P, c)`), OSQP (same
@@ -47,6 +48,7 @@ from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
 from uav_fault_estimator.estimation.estimator_settings import (
     EstimatorSettings,
     config_from_settings,
+    sensor_overrides,
 )
 from uav_fault_estimator.estimation.mhe import EstimateResult, MovingHorizonEstimator
 from uav_fault_estimator.estimation.noise_model import load_noise_calibration
@@ -55,6 +57,7 @@ from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP
 from uav_fault_estimator.estimation.reference_solution import ClarabelSolver, solve_reference
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
+from uav_fault_estimator.estimation.residuals import WIND_PITOT
 from uav_fault_estimator.reporting.report import residual_update_period_s
 from uav_sim.scenario import TURBULENCE_LEVELS, default_scenario_path, load_scenario
 from uav_sim.simulation import Simulation
@@ -68,23 +71,30 @@ REPEATS = 7  # passes over the same sequence per timing (see fastest)
 
 
 def node_config(wind_errors: bool = False) -> EstimatorConfig:
-    """mhe_node's defaults; with the three wind-error nuisance columns or faults only."""
-    settings = EstimatorSettings(estimate_wind_errors=wind_errors)
-    return config_from_settings(settings, load_noise_calibration(vehicle=settings.vehicle))
+    """mhe_node's defaults; faults only (Q of the air data), or as for an aircraft without
+    vanes: with the three wind-error columns, Q of the pitot suite."""
+    settings = EstimatorSettings(**sensor_overrides(air_data=True, vanes=not wind_errors))
+    noise = load_noise_calibration(vehicle=settings.vehicle)
+    config = config_from_settings(settings, noise)
+    if wind_errors:
+        config = dataclasses.replace(config, q_diag=tuple(
+            noise.q_diag(WIND_PITOT, settings.noise_variance_factor)))
+    return config
 
 
-def flown_sequence(samples: int, turbulence: str) -> tuple[np.ndarray, ...]:
+def flown_sequence(samples: int, turbulence: str, vanes: bool = True) -> tuple[np.ndarray, ...]:
     """y (samples, 6), S (samples, 6, 4 + 3), valid (samples, 6) every 0.5 s of the
     default scenario from the first valid residual on, from the core simulator and residual
-    generator (residual_node's defaults, the models flying the air data, with the three
-    wind-error columns after the four faults)."""
+    generator (residual_node's defaults, the models flying the air data, or without vanes
+    the pitot, with the three wind-error columns after the four faults)."""
     scenario = load_scenario(default_scenario_path())
     scenario = dataclasses.replace(
         scenario, wind=dataclasses.replace(scenario.wind, turbulence=turbulence),
         duration_s=max(scenario.duration_s, samples * UPDATE_PERIOD_S + 30.0),
+        sensors=dataclasses.replace(scenario.sensors, vanes=vanes),
     )
     simulation = Simulation(scenario)
-    sampler = residual_sampler(ResidualSettings(wind_error_step_mps=1.0))
+    sampler = residual_sampler(ResidualSettings())
     rows = []
     sample = simulation.sample()
     while len(rows) < samples:
@@ -467,10 +477,11 @@ def main() -> None:
     where = f"Default scenario, {arguments.turbulence} turbulence"
     report = {"estimator": ESTIMATOR, "solvers": compare_solvers(
         node_config(), faults_only(first), f"{where}, the four faults (p = 4)")}
+    vaneless = flown_sequence(50 + arguments.updates, arguments.turbulence, vanes=False)
     try:
         report["solvers_with_wind_errors"] = compare_solvers(
-            node_config(wind_errors=True), first,
-            f"{where}, four faults and three wind errors (estimate_wind_errors)")
+            node_config(wind_errors=True), vaneless,
+            f"{where} without vanes, four faults and three wind errors (estimate_wind_errors)")
     except RuntimeError as error:  # the reference could not solve it: no deviation to show
         print(f"\nfour faults and three wind errors: not compared ({error})")
     report.update(scaling(faults_only(flown), arguments.updates))

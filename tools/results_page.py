@@ -99,7 +99,7 @@ def bench_mhe(data: Mapping[str, Any]) -> list[str]:
              "", "### Solvers, four faults", ""]
     lines += _solvers(data.get("solvers", {}))
     if data.get("solvers_with_wind_errors"):
-        lines += ["### Solvers, with the wind-error columns", ""]
+        lines += ["### Solvers, without vanes (four faults and three wind errors)", ""]
         lines += _solvers(data["solvers_with_wind_errors"])
     lines += ["### Against the horizon", "", "N residual samples in the window, p = 4, the "
               "flown sequence.", ""]
