@@ -73,7 +73,8 @@ def fly_and_estimate(
         if result is not None:
             estimate = step.update(ResidualInput(
                 sample.time_s, result.residual, result.valid, result.sensitivity,
-                sampler.generator.column_names, result.wind_source, result.tau_a_s))
+                sampler.generator.column_names, result.wind_source, result.tau_a_s,
+                result.wind_flown_ned_mps, result.air_velocity_body_mps, result.attitude_rad))
             stamps.append(sample.time_s)
             values.append(estimate.published_pct)
             statuses.append(int(estimate.estimate.status))

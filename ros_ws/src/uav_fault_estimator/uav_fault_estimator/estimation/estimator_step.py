@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from uav_common.channels import DETECTION_THRESHOLD_PCT
 
+from uav_fault_estimator.estimation.air_data_estimate import AirDataEstimate, estimate_air_data
 from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
 from uav_fault_estimator.estimation.estimator_settings import (
     EstimatorSettings,
@@ -32,7 +33,12 @@ from uav_fault_estimator.estimation.noise_model import (
     SuiteNoise,
     load_noise_calibration,
 )
-from uav_fault_estimator.estimation.residuals import RESIDUAL_CHANNELS, WIND_ERROR_NAMES
+from uav_fault_estimator.estimation.residuals import (
+    RESIDUAL_CHANNELS,
+    WIND_ERROR_NAMES,
+    WIND_PITOT,
+)
+from uav_fault_estimator.estimation.solve_status import SolveStatus
 
 # The estimator has settled this long [s of sim time] after the first residual: errors are
 # judged from here (metrics.json's settle_s), and model_fit first judges a window this long.
@@ -48,7 +54,10 @@ class ResidualInput:
     """One residual sample as the step takes it: time_s [s]; residual (6,) and valid (6,)
     in RESIDUAL_CHANNELS order; sensitivity (6 * p,) row-major, or (6, p), its columns
     named by column_names; wind_source (noise_model.SUITES key) and the residual filter's
-    time constant tau_a_s [s] (how long a residual remembers the wind it flew)."""
+    time constant tau_a_s [s] (how long a residual remembers the wind it flew); what the
+    newest sample's models flew, for synthetic air data (air_data_estimate.py): the wind
+    (3,) [m/s, NED], the air velocity (3,) [m/s, body axes], the attitude (3,) [rad]
+    (None: not given)."""
 
     time_s: float
     residual: np.ndarray
@@ -57,19 +66,24 @@ class ResidualInput:
     column_names: Sequence[str]
     wind_source: int
     tau_a_s: float
+    wind_flown_ned_mps: np.ndarray | None = None
+    air_velocity_body_mps: np.ndarray | None = None
+    attitude_rad: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
 class StepResult:
     """What one step gives: the estimator's result, the published faults' estimates
     (published_names order) [%] and their window (N, n) [%], the window's span horizon_s
-    [s], and the model_fit verdict."""
+    [s], the model_fit verdict, and the synthetic air data (None unless the wind errors
+    are estimated, the sample flew a pitot without vanes and its estimate was solved)."""
 
     estimate: EstimateResult
     published_pct: np.ndarray
     window_pct: np.ndarray
     horizon_s: float
     fit: FitVerdict
+    air_data: AirDataEstimate | None = None
 
 
 def warm_up_text(config: EstimatorConfig) -> str:
@@ -173,4 +187,23 @@ class EstimatorStep:
                                     np.asarray(sample.valid), sample.wind_source,
                                     fault_reported(published_pct))
         return StepResult(estimate, published_pct, estimate.window_pct[:, published],
-                          self.window_stamps_s[-1] - self.window_stamps_s[0], fit)
+                          self.window_stamps_s[-1] - self.window_stamps_s[0], fit,
+                          self.air_data(sample, estimate))
+
+    def air_data(self, sample: ResidualInput, estimate: EstimateResult) -> AirDataEstimate | None:
+        """The synthetic air data of the sample (StepResult.air_data). Its wind error's
+        covariance: the estimator's (MovingHorizonEstimator.newest_covariance), plus what
+        the error moves within F_a's memory, which the residuals see only as its mean: the
+        Gauss-Markov steps of tau_a / (sample period) samples."""
+        if (sample.wind_source != WIND_PITOT or estimate.status is not SolveStatus.SOLVED
+                or sample.air_velocity_body_mps is None or len(self.window_stamps_s) < 2
+                or not set(WIND_ERROR_NAMES) <= set(self.estimated_names)):
+            return None
+        columns = estimate.columns(WIND_ERROR_NAMES)
+        period_s = float(np.median(np.diff(self.window_stamps_s)))
+        within_filter = (self.settings.wind_error_sigma_mps**2 * sample.tau_a_s
+                         / period_s) * np.eye(len(columns))
+        return estimate_air_data(
+            np.asarray(sample.wind_flown_ned_mps), np.asarray(sample.air_velocity_body_mps),
+            np.asarray(sample.attitude_rad), estimate.fault_pct[columns],
+            self.estimator.newest_covariance(columns) + within_filter)

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from operator import attrgetter
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
 
 from uav_fault_estimator.estimation.arrival_cost import ArrivalCost, increment_prior
 from uav_fault_estimator.estimation.estimator_config import EstimatorConfig
@@ -213,6 +215,25 @@ class MovingHorizonEstimator:
         if (time.perf_counter() - start[0]) * 1e3 > self.config.solver.budget_ms:
             self._drop_oldest_suspect()
         return self._result(outcome.status, outcome, start)
+
+    def newest_covariance(self, columns: Sequence[int]) -> np.ndarray:
+        """The covariance of the newest sample's estimate of the given columns (indices
+        into column_names) (k, k) [column unit²], by the Laplace approximation: that block
+        of H⁻¹, H the window QP's Hessian at the last update (UAV eq. 15-17; its
+        constraints left out, so an estimate at a bound reads as free). A variable without
+        curvature (a monotonic fault's on a sample without data: its prior is linear) is
+        unbounded and touches no other: it gets unit curvature, which changes no other
+        block. NaN where H is singular otherwise."""
+        newest = self.problem.f_index[-1, list(columns)]
+        unit = np.zeros((self.problem.n_variables, newest.size))
+        unit[newest, np.arange(newest.size)] = 1.0
+        hessian = self.problem.H.tocsc()
+        hessian = hessian + sp.diags((hessian.diagonal() == 0.0).astype(float))
+        try:
+            solved = splu(hessian.tocsc()).solve(unit)
+        except RuntimeError:  # exactly singular
+            return np.full((newest.size, newest.size), np.nan)
+        return solved[newest]
 
     def _drop_oldest_suspect(self) -> None:
         """After an update over budget: the window's oldest sample whose fit leaves a

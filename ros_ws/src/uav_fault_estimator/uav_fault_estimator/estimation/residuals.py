@@ -164,6 +164,9 @@ class ResidualSample:
     sensitivity: np.ndarray   # (6, columns) S [row unit per % of fault, or per m/s of wind]
     valid: np.ndarray         # (6,) bool: the row's needed channels were all present
     tau_a_s: float            # F_a's time constant on the newest sample [s]
+    wind_flown_ned_mps: np.ndarray     # (3,) the wind the newest sample's models flew [m/s]
+    air_velocity_body_mps: np.ndarray  # (3,) their air-relative velocity, body axes [m/s]
+    attitude_rad: np.ndarray           # (3,) roll, pitch, yaw of the newest sample [rad]
     wind_source: int          # WIND_AIR_DATA, WIND_PITOT or WIND_FILTERED: what the newest
                               # sample flew
 
@@ -262,6 +265,7 @@ class ResidualGenerator:
         self.next_sensitivity_s = -math.inf
         self.row_invalid_until_s = np.full(6, math.inf)
         self.wind_source = WIND_FILTERED
+        self.flown_wind_ned_mps = np.full(3, math.nan)  # of the newest sample taken
         self.latest: ResidualSample | None = None
 
     def _column_wind(self, column: _Column, state: np.ndarray, wind: np.ndarray,
@@ -360,6 +364,7 @@ class ResidualGenerator:
             self.wind_source = WIND_PITOT
         else:
             air_data = None
+        self.flown_wind_ned_mps = wind
         tau_s = self.tau_a_pitot_s if self.wind_source == WIND_PITOT else self.tau_a_s
         self.observed_filter.tau_s = self.predicted_filter.tau_s = tau_s
         prediction = self._prediction(state, self.held_inputs["controls"], wind, time_s,
@@ -401,6 +406,7 @@ class ResidualGenerator:
         """The filtered quantities with their linear rows rotated to body axes."""
         rotation = np.eye(6)
         rotation[:3, :3] = ned_to_body(*state[ATTITUDE])
+        air_velocity_ned_mps = state[VELOCITY[:3]] - self.flown_wind_ned_mps
         observed = rotation @ self.observed_filter.output
         predicted_and_s = rotation @ self.predicted_filter.output
         predicted = predicted_and_s[:, 0]
@@ -412,6 +418,9 @@ class ResidualGenerator:
             sensitivity=predicted_and_s[:, 1:].copy(),
             valid=valid.copy(),
             tau_a_s=self.observed_filter.tau_s,
+            wind_flown_ned_mps=self.flown_wind_ned_mps.copy(),
+            air_velocity_body_mps=rotation[:3, :3] @ air_velocity_ned_mps,
+            attitude_rad=state[ATTITUDE].copy(),
             wind_source=self.wind_source,
         )
 

@@ -2,7 +2,10 @@
 
 Subscribes `residuals` (Residuals); publishes `faults/estimate` (FaultEstimate) on every
 residual, stamped with the residual's stamp, and solver figures on `/diagnostics`, with the
-model's health as a status of its own, `mhe_node/model_fit` (estimation/model_fit.py).
+model's health as a status of its own, `mhe_node/model_fit` (estimation/model_fit.py). With
+estimate_wind_errors it publishes `air_data/estimate` (AirDataEstimate) on every solved
+residual whose models flew a pitot without vanes: synthetic flow angles and wind
+(estimation/air_data_estimate.py).
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from typing import Any
 
 import numpy as np
 from rclpy.node import Node
+from std_msgs.msg import Header
 from uav_common.message_fields import stamp_nanoseconds, stamp_seconds
 from uav_common.ros.diagnostics import ERROR, OK, WARN, Diagnostics
 from uav_common.ros.matched_streams import guarded
@@ -29,8 +33,10 @@ from uav_common.ros.parameters import (
 from uav_common.ros.qos import STREAM_QOS_PROFILES
 from uav_common.settings import parameter_specs, replaced, settings_from
 from uav_common.stamp_matching import GuardedStream, StampVerdict
+from uav_fault_msgs.msg import AirDataEstimate as AirDataEstimateMessage
 from uav_fault_msgs.msg import FaultEstimate, Residuals
 
+from uav_fault_estimator.estimation.air_data_estimate import AirDataEstimate
 from uav_fault_estimator.estimation.estimator_config import SOLVER_METHOD_KEY, SOLVER_METHODS
 from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.estimator_step import (
@@ -73,6 +79,9 @@ class MheNode(Node):
         self.estimated = self.step.estimated_names  # faults, then any nuisance parameters
         qos = STREAM_QOS_PROFILES[p["qos"]]
         self.publisher = self.create_publisher(FaultEstimate, "faults/estimate", qos)
+        self.air_data_publisher = (
+            self.create_publisher(AirDataEstimateMessage, "air_data/estimate", qos)
+            if p["estimate_wind_errors"] else None)
         when_subscribed(self, self.publisher, p["wait_for_subscribers"],
                         lambda: self.create_subscription(
                             Residuals, "residuals", self.on_residuals, qos))
@@ -151,12 +160,16 @@ class MheNode(Node):
             step = self.step.update(ResidualInput(
                 stamp_seconds(message.header.stamp), np.array(message.residual),
                 np.array(message.valid), np.array(message.sensitivity),
-                message.fault_names, message.wind_source, message.filter_time_constant_s))
+                message.fault_names, message.wind_source, message.filter_time_constant_s,
+                np.array(message.wind_flown_ned_mps), np.array(message.air_velocity_body_mps),
+                np.array(message.attitude_rad)))
         except RejectedSampleError as error:
             self.reject(str(error))
             return
         estimate = self.estimate_message(message, step)
         self.publisher.publish(estimate)
+        if step.air_data is not None and self.air_data_publisher is not None:
+            self.air_data_publisher.publish(air_data_message(estimate.header, step.air_data))
         self.count(step.estimate)
         self.report_fit(step.fit)
         if self.state_file is not None:
@@ -234,6 +247,16 @@ class MheNode(Node):
             "p99_ms": f"{np.percentile(times, 99):.3f}",
             "max_ms": f"{times.max():.3f}",
         })
+
+
+def air_data_message(stamp: Header, air_data: AirDataEstimate) -> AirDataEstimateMessage:
+    """The synthetic air data as its message, under the estimate's header."""
+    return AirDataEstimateMessage(
+        header=stamp, true_airspeed_mps=air_data.true_airspeed_mps,
+        angle_of_attack_rad=air_data.angle_of_attack_rad, sideslip_rad=air_data.sideslip_rad,
+        wind_ned_mps=air_data.wind_ned_mps.tolist(),
+        angle_of_attack_std_rad=air_data.angle_of_attack_std_rad,
+        sideslip_std_rad=air_data.sideslip_std_rad, wind_std_mps=air_data.wind_std_mps.tolist())
 
 
 def main(args: list[str] | None = None) -> int:

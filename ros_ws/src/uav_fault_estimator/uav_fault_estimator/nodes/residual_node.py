@@ -129,6 +129,9 @@ class ResidualNode(Node):
             valid=sample.valid.tolist(),
             wind_source=sample.wind_source,
             filter_time_constant_s=sample.tau_a_s,
+            wind_flown_ned_mps=sample.wind_flown_ned_mps.tolist(),
+            air_velocity_body_mps=sample.air_velocity_body_mps.tolist(),
+            attitude_rad=sample.attitude_rad.tolist(),
             fault_names=list(self.generator.column_names),
             sensitivity=sample.sensitivity.ravel().tolist(),  # row-major 6 x p
         )
