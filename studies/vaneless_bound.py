@@ -31,17 +31,16 @@ from pathlib import Path
 import numpy as np
 from uav_common.channels import DETECTION_THRESHOLD_PCT as THRESHOLD_PCT
 from uav_common.channels import PAPER_FAULT_NAMES
-from uav_common.settings import settings_from
 from uav_fault_estimator.campaigns.campaign import (
     Campaign,
     add_campaign_arguments,
     campaign_options,
     exit_on_failed_tasks,
 )
-from uav_fault_estimator.chain.offline import fault_free_flights, fly_and_estimate
-from uav_fault_estimator.estimation.estimator_settings import (
-    EstimatorSettings,
-    sensor_overrides,
+from uav_fault_estimator.chain.offline import (
+    fault_free_flights,
+    fly_and_estimate,
+    scenario_estimator_settings,
 )
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.fault_bound import window_fault_bound
@@ -68,9 +67,7 @@ def flight_bounds(scenario: Scenario) -> list[list[float]]:
     """The bound (window_fault_bound) of each estimator window after SETTLE_S of the
     fault-free flight, with the default residual and estimator settings for its sensors
     (p per window) [%]."""
-    sensors = scenario.sensors
-    estimator = settings_from(EstimatorSettings, {
-        "vehicle": scenario.vehicle, **sensor_overrides(sensors.air_data, sensors.vanes)})
+    estimator = scenario_estimator_settings(scenario)
     sampler = residual_sampler(ResidualSettings(vehicle=scenario.vehicle))
     noise = load_noise_calibration("", scenario.vehicle)
     simulation = Simulation(scenario)
@@ -132,20 +129,26 @@ def summarise(bounds: list, flights: list, seeds: int) -> dict:
     return summary
 
 
+# The table's per-fault columns before and after the false alarms, and their formats
+_COLUMNS = (("bound_pct", ".2f"), ("rmse_pct", ".2f"), ("delay_s", "g"),
+            ("fault_free_largest_pct", ".2f"), ("fault_free_rmse_pct", ".2f"))
+
+
+def _per_fault(faults: dict, key: str, form: str) -> str:
+    """One figure of every fault, "-" where there is none, joined by " / "."""
+    return " / ".join("-" if v[key] is None else format(v[key], form) for v in faults.values())
+
+
 def print_table(summary: dict) -> None:
     print("| vehicle | sensors | bound [%] | rmse [%] | delay [s] | false alarms | "
           "fault-free largest [%] | fault-free rmse [%] |")
     print("|---|---|---|---|---|---|---|---|")
     for vehicle, suites in summary.items():
         for suite, faults in suites.items():
-            def column(key: str, form: str, entries: dict = faults) -> str:
-                return " / ".join("-" if v[key] is None else format(v[key], form)
-                                  for v in entries.values())
             alarms = ", ".join(n for n, v in faults.items() if v["false_alarm"]) or "none"
-            print(f"| {vehicle} | {suite} | {column('bound_pct', '.2f')} | "
-                  f"{column('rmse_pct', '.2f')} | {column('delay_s', 'g')} | {alarms} | "
-                  f"{column('fault_free_largest_pct', '.2f')} | "
-                  f"{column('fault_free_rmse_pct', '.2f')} |")
+            cells = [_per_fault(faults, key, form) for key, form in _COLUMNS]
+            cells.insert(3, alarms)
+            print(f"| {vehicle} | {suite} | " + " | ".join(cells) + " |")
 
 
 @exit_on_failed_tasks

@@ -10,14 +10,10 @@ import math
 import numpy as np
 import pytest
 from uav_aircraft.frames import ned_to_body
-from uav_common.settings import settings_from
+from uav_fault_estimator.chain.offline import scenario_estimator_settings, step_input
 from uav_fault_estimator.estimation.air_data_estimate import estimate_air_data
 from uav_fault_estimator.estimation.estimator_config import EstimatorConfig, FaultConfig
-from uav_fault_estimator.estimation.estimator_settings import (
-    EstimatorSettings,
-    sensor_overrides,
-)
-from uav_fault_estimator.estimation.estimator_step import EstimatorStep, ResidualInput
+from uav_fault_estimator.estimation.estimator_step import EstimatorStep
 from uav_fault_estimator.estimation.mhe import MovingHorizonEstimator
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
@@ -83,7 +79,7 @@ def test_the_estimated_flow_angles_follow_the_truth_on_a_turbulent_flight():
     scenario = dataclasses.replace(scenario, duration_s=120.0, faults=(),
                                    sensors=dataclasses.replace(scenario.sensors, vanes=False))
     sampler = residual_sampler(ResidualSettings())
-    step = EstimatorStep(settings_from(EstimatorSettings, sensor_overrides(True, False)))
+    step = EstimatorStep(scenario_estimator_settings(scenario))
     simulation = Simulation(scenario)
     errors, triangle, deviations = [], [], []
     sample = simulation.sample()
@@ -91,11 +87,7 @@ def test_the_estimated_flow_angles_follow_the_truth_on_a_turbulent_flight():
         result = sampler.update(sample.time_s, sample.state, sample.controls,
                                 sample.wind_filtered_ned_mps, sample.air_data)
         if result is not None:
-            air_data = step.update(ResidualInput(
-                sample.time_s, result.residual, result.valid, result.sensitivity,
-                sampler.generator.column_names, result.wind_source, result.tau_a_s,
-                result.wind_flown_ned_mps, result.air_velocity_body_mps,
-                result.attitude_rad)).air_data
+            air_data = step.update(step_input(result, sampler.generator.column_names)).air_data
             if air_data is not None and sample.time_s >= 20.0:
                 truth = sample.true_air_data[1:]
                 u, v, w = result.air_velocity_body_mps

@@ -31,7 +31,7 @@ from uav_fault_estimator.estimation.model_calibration import SensorFlight
 from uav_fault_estimator.estimation.noise_model import without_wind_errors
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
-from uav_fault_estimator.estimation.residuals import WIND_PITOT
+from uav_fault_estimator.estimation.residuals import WIND_PITOT, ResidualSample
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
 
 _AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
@@ -59,10 +59,7 @@ def fly_and_estimate(
     calibration's), as residual_node's model_calibration_file gives it.
     """
     sampler = residual_sampler(residual or ResidualSettings(vehicle=scenario.vehicle), model)
-    sensors = scenario.sensors
-    step = EstimatorStep(estimator or settings_from(EstimatorSettings, {
-        "vehicle": scenario.vehicle, **sensor_overrides(sensors.air_data, sensors.vanes),
-        **scenario.estimator}))
+    step = EstimatorStep(estimator or scenario_estimator_settings(scenario))
     simulation = Simulation(scenario)
     stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
     sample = simulation.sample()
@@ -71,10 +68,7 @@ def fly_and_estimate(
         result = sampler.update(sample.time_s, sample.state, sample.controls, wind,
                                 None if true_wind else sample.air_data)
         if result is not None:
-            estimate = step.update(ResidualInput(
-                sample.time_s, result.residual, result.valid, result.sensitivity,
-                sampler.generator.column_names, result.wind_source, result.tau_a_s,
-                result.wind_flown_ned_mps, result.air_velocity_body_mps, result.attitude_rad))
+            estimate = step.update(step_input(result, sampler.generator.column_names))
             stamps.append(sample.time_s)
             values.append(estimate.published_pct)
             statuses.append(int(estimate.estimate.status))
@@ -91,6 +85,24 @@ def fly_and_estimate(
                        step.config.solver.method),
         SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
     )
+
+
+def scenario_estimator_settings(scenario: Scenario) -> EstimatorSettings:
+    """mhe_node's settings for the scenario: its vehicle, what its sensors call for
+    (estimator_settings.sensor_overrides), then its `estimator` overrides."""
+    sensors = scenario.sensors
+    return settings_from(EstimatorSettings, {
+        "vehicle": scenario.vehicle, **sensor_overrides(sensors.air_data, sensors.vanes),
+        **scenario.estimator})
+
+
+def step_input(sample: ResidualSample, column_names: Sequence[str]) -> ResidualInput:
+    """A residual sample as the estimator step takes it (what residual_node publishes of
+    it), its columns named column_names."""
+    return ResidualInput(sample.time_s, sample.residual, sample.valid, sample.sensitivity,
+                         column_names, sample.wind_source, sample.tau_a_s,
+                         sample.wind_flown_ned_mps, sample.air_velocity_body_mps,
+                         sample.attitude_rad)
 
 
 class GridFlight(NamedTuple):

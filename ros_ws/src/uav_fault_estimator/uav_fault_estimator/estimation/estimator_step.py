@@ -25,6 +25,7 @@ from uav_fault_estimator.estimation.estimator_settings import (
 from uav_fault_estimator.estimation.mhe import (
     EstimateResult,
     MovingHorizonEstimator,
+    median_period_s,
     missing_samples,
 )
 from uav_fault_estimator.estimation.model_fit import FitVerdict, ModelFit
@@ -195,12 +196,12 @@ class EstimatorStep:
         covariance: the estimator's (MovingHorizonEstimator.newest_covariance), plus what
         the error moves within F_a's memory, which the residuals see only as its mean: the
         Gauss-Markov steps of tau_a / (sample period) samples."""
+        period_s = median_period_s(self.window_stamps_s)
         if (sample.wind_source != WIND_PITOT or estimate.status is not SolveStatus.SOLVED
-                or sample.air_velocity_body_mps is None or len(self.window_stamps_s) < 2
+                or sample.air_velocity_body_mps is None or not period_s
                 or not set(WIND_ERROR_NAMES) <= set(self.estimated_names)):
             return None
         columns = estimate.columns(WIND_ERROR_NAMES)
-        period_s = float(np.median(np.diff(self.window_stamps_s)))
         within_filter = (self.settings.wind_error_sigma_mps**2 * sample.tau_a_s
                          / period_s) * np.eye(len(columns))
         return estimate_air_data(

@@ -39,13 +39,17 @@ GAP_SAMPLES_MAX = 200
 SUSPECT_SIGMAS = 10.0
 
 
+def median_period_s(stamps_s: Sequence[float]) -> float | None:
+    """A stream's sample period [s]: the median interval of its stamps [s]; None while
+    fewer than two stamps tell it."""
+    return float(np.median(np.diff(stamps_s))) if len(stamps_s) >= 2 else None
+
+
 def missing_samples(gap_s: float, stamps_s: Sequence[float]) -> int:
     """Sample periods missing in a gap of gap_s [s] of a stream stamped stamps_s [s] before
-    it (its median period; 0 while fewer than two stamps tell it)."""
-    if len(stamps_s) < 2:
-        return 0
-    period_s = float(np.median(np.diff(stamps_s)))
-    return max(round(gap_s / period_s) - 1, 0) if period_s > 0 else 0
+    it (median_period_s; 0 while it is not known)."""
+    period_s = median_period_s(stamps_s)
+    return max(round(gap_s / period_s) - 1, 0) if period_s else 0
 
 
 @dataclass
@@ -227,10 +231,10 @@ class MovingHorizonEstimator:
         newest = self.problem.f_index[-1, list(columns)]
         unit = np.zeros((self.problem.n_variables, newest.size))
         unit[newest, np.arange(newest.size)] = 1.0
-        hessian = self.problem.H.tocsc()
-        hessian = hessian + sp.diags((hessian.diagonal() == 0.0).astype(float))
+        hessian = self.problem.H
+        regularised = hessian + sp.diags((hessian.diagonal() == 0.0).astype(float))
         try:
-            solved = splu(hessian.tocsc()).solve(unit)
+            solved = splu(regularised.tocsc()).solve(unit)
         except RuntimeError:  # exactly singular
             return np.full((newest.size, newest.size), np.nan)
         return solved[newest]
