@@ -14,7 +14,12 @@ nodes' defaults for those sensors, and prints per fault:
   calibrated noise), median over the fault-free flights' windows after settle_s;
 - the default scenario's RMS error after settle_s, detection delay and false alarms;
 - the fault-free flights' largest estimate after settle_s and their RMS (the estimator's
-  steady-state error, to hold against the bound).
+  steady-state error, to hold against the bound);
+- the synthetic air data's flow-angle RMS against the simulator's (a pitot without vanes);
+- and, per held-out seed, the default scenario flown in another turbulence and wind
+  (offline.wind_variant: seeds from HELD_OUT_FIRST_SEED, background winds of 22 % of the
+  airspeed, directions HELD_OUT_DIRECTIONS_DEG), on which no setting was tuned: RMS,
+  delays, false alarms and flow-angle RMS.
 
 Seeds other than the calibrations' (101-112, 201-212, 301-304) and the other studies'.
 """
@@ -41,13 +46,14 @@ from uav_fault_estimator.chain.offline import (
     fault_free_flights,
     fly_and_estimate,
     scenario_estimator_settings,
+    wind_variant,
 )
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.fault_bound import window_fault_bound
 from uav_fault_estimator.estimation.noise_model import SUITES, load_noise_calibration, white_share
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
-from uav_fault_estimator.reporting.metrics import fault_metrics
+from uav_fault_estimator.reporting.metrics import fault_metrics, flow_angle_rms_deg
 from uav_sim.scenario import Scenario, load_scenario, vehicle_scenario_path
 from uav_sim.simulation import Simulation
 
@@ -55,6 +61,16 @@ VEHICLES = ("aerosonde", "carbon_z")
 SUITE_VANES = {"vanes": True, "pitot": False}  # the suites compared: air data with or without
 FIRST_SEED = 601
 WINDOW_STRIDE = 10  # samples between the windows whose bound is taken
+HELD_OUT_FIRST_SEED = 611
+HELD_OUT_DIRECTIONS_DEG = (45.0, 165.0, 285.0)
+HELD_OUT_WIND_SHARE = 0.22  # of the airspeed
+
+
+def held_out_flights(scenario: Scenario) -> list[Scenario]:
+    """The faulted scenario in other turbulence and winds (module docstring)."""
+    speed_mps = HELD_OUT_WIND_SHARE * scenario.initial.airspeed_mps
+    return [wind_variant(scenario, HELD_OUT_FIRST_SEED + i, direction, speed_mps)
+            for i, direction in enumerate(HELD_OUT_DIRECTIONS_DEG)]
 
 
 def with_vanes(scenario: Scenario, vanes: bool) -> Scenario:
@@ -96,36 +112,51 @@ def flight_bounds(scenario: Scenario) -> list[list[float]]:
 
 def estimated(scenario: Scenario) -> dict:
     """The offline chain's figures of the flight: per fault its metrics and largest
-    estimate after SETTLE_S, and the false alarms."""
+    estimate after SETTLE_S, the false alarms and the synthetic flow angles' RMS [deg]
+    (None with vanes)."""
     estimates, seeded = fly_and_estimate(scenario)
     faults, false_alarms = fault_metrics(estimates, seeded, SETTLE_S, THRESHOLD_PCT)
     settled = estimates.stamps_s >= SETTLE_S
     largest = estimates.values_pct[settled].max(axis=0)
     return {"faults": {name: {**faults[name], "largest_pct": float(largest[j])}
                        for j, name in enumerate(estimates.names)},
-            "false_alarms": false_alarms}
+            "false_alarms": false_alarms,
+            "flow_angle_rms_deg": flow_angle_rms_deg(estimates, SETTLE_S)}
 
 
 def summarise(bounds: list, flights: list, seeds: int) -> dict:
-    """Per vehicle and suite, per fault: the bound, the default scenario's RMS, delay and
-    whether it false-alarmed, the fault-free flights' largest estimate and RMS. bounds: per
-    (vehicle, suite) its seeds fault-free flights'; flights: per (vehicle, suite) its
-    default scenario's, then its fault-free flights'."""
+    """Per vehicle and suite: per fault the bound, the default scenario's RMS, delay and
+    whether it false-alarmed, the fault-free flights' largest estimate and RMS; the
+    default's flow-angle RMS; and per held-out seed its figures. bounds: per (vehicle,
+    suite) its seeds fault-free flights'; flights: per (vehicle, suite) its default
+    scenario's, its fault-free flights', then its held-out flights'."""
     summary: dict = {}
     cells = [(vehicle, suite) for vehicle in VEHICLES for suite in SUITE_VANES]
+    per_cell = 1 + seeds + len(HELD_OUT_DIRECTIONS_DEG)
     for k, (vehicle, suite) in enumerate(cells):
         windows = np.concatenate([np.array(b) for b in bounds[k * seeds:(k + 1) * seeds]])
-        default, *free = flights[k * (seeds + 1):(k + 1) * (seeds + 1)]
+        default, *others = flights[k * per_cell:(k + 1) * per_cell]
+        free, held_out = others[:seeds], others[seeds:]
         summary.setdefault(vehicle, {})[suite] = {
-            name: {"bound_pct": round(float(np.median(windows[:, j])), 2),
-                   "rmse_pct": default["faults"][name]["rmse_pct"],
-                   "delay_s": default["faults"][name]["detection_delay_s"],
-                   "false_alarm": name in default["false_alarms"],
-                   "fault_free_largest_pct": round(max(
-                       f["faults"][name]["largest_pct"] for f in free), 2),
-                   "fault_free_rmse_pct": round(max(
-                       f["faults"][name]["rmse_pct"] for f in free), 2)}
-            for j, name in enumerate(PAPER_FAULT_NAMES)}
+            "faults": {
+                name: {"bound_pct": round(float(np.median(windows[:, j])), 2),
+                       "rmse_pct": default["faults"][name]["rmse_pct"],
+                       "delay_s": default["faults"][name]["detection_delay_s"],
+                       "false_alarm": name in default["false_alarms"],
+                       "fault_free_largest_pct": round(max(
+                           f["faults"][name]["largest_pct"] for f in free), 2),
+                       "fault_free_rmse_pct": round(max(
+                           f["faults"][name]["rmse_pct"] for f in free), 2)}
+                for j, name in enumerate(PAPER_FAULT_NAMES)},
+            "flow_angle_rms_deg": default["flow_angle_rms_deg"],
+            "held_out": [
+                {"seed": HELD_OUT_FIRST_SEED + i,
+                 "rmse_pct": [f["faults"][name]["rmse_pct"] for name in PAPER_FAULT_NAMES],
+                 "delay_s": [f["faults"][name]["detection_delay_s"]
+                             for name in PAPER_FAULT_NAMES],
+                 "false_alarms": f["false_alarms"],
+                 "flow_angle_rms_deg": f["flow_angle_rms_deg"]}
+                for i, f in enumerate(held_out)]}
     return summary
 
 
@@ -141,14 +172,25 @@ def _per_fault(faults: dict, key: str, form: str) -> str:
 
 def print_table(summary: dict) -> None:
     print("| vehicle | sensors | bound [%] | rmse [%] | delay [s] | false alarms | "
-          "fault-free largest [%] | fault-free rmse [%] |")
-    print("|---|---|---|---|---|---|---|---|")
+          "fault-free largest [%] | fault-free rmse [%] | flow angles [deg] |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for vehicle, suites in summary.items():
-        for suite, faults in suites.items():
+        for suite, cell in suites.items():
+            faults = cell["faults"]
             alarms = ", ".join(n for n, v in faults.items() if v["false_alarm"]) or "none"
             cells = [_per_fault(faults, key, form) for key, form in _COLUMNS]
             cells.insert(3, alarms)
-            print(f"| {vehicle} | {suite} | " + " | ".join(cells) + " |")
+            print(f"| {vehicle} | {suite} | " + " | ".join(cells)
+                  + f" | {cell['flow_angle_rms_deg'] or '-'} |")
+    print("\nHeld-out seeds of the default scenario")
+    print("| vehicle | sensors | seed | rmse [%] | delay [s] | false alarms | flow angles [deg] |")
+    print("|---|---|---|---|---|---|---|")
+    for vehicle, suites in summary.items():
+        for suite, cell in suites.items():
+            for flight in cell["held_out"]:
+                print(f"| {vehicle} | {suite} | {flight['seed']} | {flight['rmse_pct']} | "
+                      f"{flight['delay_s']} | {', '.join(flight['false_alarms']) or 'none'} | "
+                      f"{flight['flow_angle_rms_deg'] or '-'} |")
 
 
 @exit_on_failed_tasks
@@ -165,7 +207,8 @@ def main() -> int:
         faulted = load_scenario(vehicle_scenario_path(vehicle, "default"))
         for vanes in SUITE_VANES.values():
             free += [with_vanes(s, vanes) for s in quiet]
-            flown += [with_vanes(faulted, vanes)] + [with_vanes(s, vanes) for s in quiet]
+            flown += [with_vanes(s, vanes)
+                      for s in (faulted, *quiet, *held_out_flights(faulted))]
     with Campaign(campaign_options(arguments)) as campaign:
         bounds = campaign.results(flight_bounds, free, "bound flights")
         flights = campaign.results(estimated, flown, "estimated flights")
@@ -174,7 +217,8 @@ def main() -> int:
     print(f"\n{len(free) + len(flown)} flights in {time.monotonic() - started:.0f} s")
     if arguments.json:
         arguments.json.write_text(json.dumps(
-            {"seeds": arguments.seeds, "first_seed": FIRST_SEED, "settle_s": SETTLE_S,
+            {"seeds": arguments.seeds, "first_seed": FIRST_SEED,
+             "held_out_wind_share": HELD_OUT_WIND_SHARE, "settle_s": SETTLE_S,
              "threshold_pct": THRESHOLD_PCT, "summary": summary}, indent=2) + "\n")
     return 0
 

@@ -12,6 +12,7 @@ from uav_fault_estimator.reporting.metrics import (
     SeededSeries,
     alarm_metrics,
     fault_metrics,
+    flow_angle_rms_deg,
     solver_metrics,
 )
 
@@ -71,6 +72,21 @@ def test_a_spike_before_settling_is_no_false_alarm():
     faults, false_alarms = fault_metrics(estimates, seeded, settle_s=20.0, threshold_pct=2.0)
     assert false_alarms == [] and faults["noisy_fault"]["detection_delay_s"] is None
     assert faults["ramp_fault"]["rmse_pct"] == 0.0
+
+
+@pytest.mark.timeout(30)
+def test_flow_angle_rms_leaves_out_the_settling_and_the_samples_without_air_data():
+    """Errors of 1 deg in alpha and 2 deg in beta after settling, 30 deg before it and NaN
+    where no air data was published: the RMS is 1 and 2 deg; None without any."""
+    estimates, _ = series()
+    errors = np.tile(np.radians([1.0, -2.0]), (ESTIMATE_STAMPS.size, 1))
+    errors[ESTIMATE_STAMPS < 20.0] = np.radians(30.0)
+    errors[::7] = np.nan
+    with_errors = dataclasses.replace(estimates, flow_angle_errors_rad=errors)
+    assert flow_angle_rms_deg(with_errors, settle_s=20.0) == pytest.approx([1.0, 2.0])
+    assert flow_angle_rms_deg(estimates, settle_s=20.0) is None
+    none_published = dataclasses.replace(estimates, flow_angle_errors_rad=errors * np.nan)
+    assert flow_angle_rms_deg(none_published, settle_s=20.0) is None
 
 
 @pytest.mark.timeout(30)

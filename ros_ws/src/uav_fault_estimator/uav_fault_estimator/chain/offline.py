@@ -52,7 +52,8 @@ def fly_and_estimate(
     own parameters, such as qos, have no part here, and with what its sensors call for,
     estimator_settings.sensor_overrides). Returns the published estimates
     (what mhe_node would publish; solve times are the estimator's update times) and the
-    seeded faults sampled at the same stamps. The models fly the air data where the
+    seeded faults sampled at the same stamps, with the synthetic air data's flow-angle
+    errors against the simulator's truth where mhe_node publishes it. The models fly the air data where the
     aircraft has it, as residual_node does. true_wind: the models get the true wind
     (background and turbulence) instead, which no aircraft has: a bound on what better
     wind knowledge could give. model: the aircraft the models evaluate (a model
@@ -62,6 +63,7 @@ def fly_and_estimate(
     step = EstimatorStep(estimator or scenario_estimator_settings(scenario))
     simulation = Simulation(scenario)
     stamps, values, statuses, times_ms, cpu_ms, seeded = [], [], [], [], [], []
+    flow_angle_errors = []
     sample = simulation.sample()
     while True:
         wind = sample.wind_ned_mps if true_wind else sample.wind_filtered_ned_mps
@@ -75,6 +77,10 @@ def fly_and_estimate(
             times_ms.append(estimate.estimate.update_time_ms)
             cpu_ms.append(estimate.estimate.update_cpu_ms)
             seeded.append(sample.seeded_faults_pct)
+            air_data = estimate.air_data
+            flow_angle_errors.append(
+                [math.nan, math.nan] if air_data is None else
+                [air_data.angle_of_attack_rad, air_data.sideslip_rad] - sample.true_air_data[1:])
         if simulation.finished:
             break
         sample = simulation.step()
@@ -82,7 +88,7 @@ def fly_and_estimate(
     return (
         EstimateSeries(step.published_names, stamps_s, np.array(values),
                        np.array(statuses), np.array(times_ms), np.array(cpu_ms),
-                       step.config.solver.method),
+                       step.config.solver.method, np.array(flow_angle_errors).reshape(-1, 2)),
         SeededSeries(list(FAULT_NAMES), stamps_s, np.array(seeded)),
     )
 

@@ -24,9 +24,11 @@ from uav_fault_estimator.estimation.solve_status import SolveStatus
 class EstimateSeries:
     """What mhe_node published: stamps (K,) [s], values (K, p) [%], statuses (K,), update
     wall times (K,) [ms], the p fault names, the updates' CPU times (K,) [ms] (None for
-    a recording made before they were published), and the solver method it ran with
+    a recording made before they were published), the solver method it ran with
     (estimator_config.SOLVER_METHODS; None for one made before mhe_node reported it, when
-    ProxSuite, the default, was the only one)."""
+    ProxSuite, the default, was the only one), and, from the offline chain, which knows the
+    simulator's truth, the synthetic air data's angle of attack and sideslip minus the
+    truth (K, 2) [rad] (NaN where none was published; None where unknown)."""
 
     names: Sequence[str]
     stamps_s: np.ndarray
@@ -35,6 +37,7 @@ class EstimateSeries:
     solve_times_ms: np.ndarray
     cpu_times_ms: np.ndarray | None = None
     solver_method: str | None = None
+    flow_angle_errors_rad: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -98,6 +101,18 @@ def fault_metrics(estimates: EstimateSeries, seeded: SeededSeries, settle_s: flo
             false_alarms.append(name)
         faults[name] = entry
     return faults, false_alarms
+
+
+def flow_angle_rms_deg(estimates: EstimateSeries, settle_s: float) -> list[float] | None:
+    """RMS of the synthetic angle of attack's and sideslip's errors after settle_s [deg]
+    (EstimateSeries.flow_angle_errors_rad); None where none are known."""
+    errors = estimates.flow_angle_errors_rad
+    if errors is None:
+        return None
+    published = errors[(estimates.stamps_s >= settle_s) & np.all(np.isfinite(errors), axis=1)]
+    if not published.size:
+        return None
+    return np.degrees(np.sqrt(np.mean(np.square(published), axis=0))).round(3).tolist()
 
 
 def solver_metrics(estimates: EstimateSeries) -> dict:
