@@ -182,7 +182,8 @@ def vaneless_bound(data: Mapping[str, Any]) -> list[str]:
               f"of {number(100 * (data.get('held_out_wind_share') or 0))} % of the airspeed "
               "from another direction; no setting was tuned on them), per fault in the order "
               "of the table above; flow angles: the synthetic angle of attack's and "
-              "sideslip's RMS against the simulator's [deg]. Seed 7: the default scenario itself.", ""]
+              "sideslip's RMS against the simulator's [deg]. Seed 7: the default scenario "
+              "itself.", ""]
     rows = [(vehicle, suite, flight.get("seed"), flight.get("rmse_pct"), flight.get("delay_s"),
              ", ".join(flight.get("false_alarms") or []) or "none",
              flight.get("flow_angle_rms_deg"))

@@ -87,7 +87,8 @@ def test_rocket_batch_estimates_improve_as_data_accrue():
             assert estimate.status is SolveStatus.SOLVED
             cycles = estimate.cycles_pct
             assert np.all(np.diff(cycles[:, :2], axis=0) >= -1e-6)  # monotonic faults
-            assert np.ptp(cycles[:, 2]) < 1e-6                       # the constant fault
+            # the constant fault: each increment 0 within the solver's tolerance
+            assert np.abs(np.diff(cycles[:, 2])).max() <= ROCKET_CONFIG.solver.eps_abs
             assert np.abs(cycles - seeded[: len(cycles)]).max() < 1.0
             errors.append(np.abs(cycles[:FIRST_CYCLES] - seeded[:FIRST_CYCLES]).mean(axis=0))
         first_cycle_errors.append(errors)

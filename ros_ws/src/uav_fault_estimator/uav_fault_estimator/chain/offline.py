@@ -53,10 +53,10 @@ def fly_and_estimate(
     estimator_settings.sensor_overrides). Returns the published estimates
     (what mhe_node would publish; solve times are the estimator's update times) and the
     seeded faults sampled at the same stamps, with the synthetic air data's flow-angle
-    errors against the simulator's truth where mhe_node publishes it. The models fly the air data where the
-    aircraft has it, as residual_node does. true_wind: the models get the true wind
-    (background and turbulence) instead, which no aircraft has: a bound on what better
-    wind knowledge could give. model: the aircraft the models evaluate (a model
+    errors against the simulator's truth where mhe_node publishes it. The models fly the
+    air data where the aircraft has it, as residual_node does. true_wind: the models get
+    the true wind (background and turbulence) instead, which no aircraft has: a bound on
+    what better wind knowledge could give. model: the aircraft the models evaluate (a model
     calibration's), as residual_node's model_calibration_file gives it.
     """
     sampler = residual_sampler(residual or ResidualSettings(vehicle=scenario.vehicle), model)

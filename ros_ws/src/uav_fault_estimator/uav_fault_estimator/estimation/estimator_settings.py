@@ -81,8 +81,8 @@ class EstimatorSettings:
     arrival_centre: str = setting(
         "where the arrival cost is centred: filter (the arrival filter's mean) or "
         "previous_window (the previous window's estimate, as the paper)", "filter")
-    # off by default: with vanes the columns are 0 and only cost solve time (2.9 against
-    # 0.6 ms median on the default flight, docs/estimator.md); on for a pitot without vanes
+    # off by default: with vanes the columns are 0 and only cost solve time (0.79 against
+    # 0.47 ms median on the default flight, docs/estimator.md); on for a pitot without vanes
     estimate_wind_errors: bool = setting(
         "also estimate the errors of the wind the models flew (S columns *_error of "
         "residual_node; 0 where vanes measure the flow) as unknowns of the window, "

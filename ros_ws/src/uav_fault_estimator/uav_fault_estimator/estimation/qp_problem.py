@@ -145,6 +145,7 @@ class WindowQP:
         self._build_hessian(h_rows, h_cols, h_vals)
         self.A, self.b = self._rows.equalities()
         self.C, self.l, self.u = self._rows.inequalities()
+        self.row_stages = self._rows.row_stages()  # of each row of [A; C]
         self.g = np.zeros(n)
 
         self.x_shift = np.arange(n)
@@ -239,12 +240,14 @@ class WindowQP:
         pattern.sum_duplicates()
         pattern.sort_indices()
         self.H = pattern
-        self._block_position = _positions(pattern, block_rows, block_cols)
+        self._block_position = pattern_positions(pattern, block_rows, block_cols)
         on_diagonal = np.flatnonzero(pattern.diagonal())
-        self._diagonal_position = _positions(pattern, on_diagonal, on_diagonal)
-        model_position = _positions(pattern, rows[: model_values.size], cols[: model_values.size])
-        self._h_model_data = np.zeros(pattern.nnz)
-        np.add.at(self._h_model_data, model_position, model_values)
+        self._diagonal_position = pattern_positions(pattern, on_diagonal, on_diagonal)
+        model_position = pattern_positions(pattern, rows[: model_values.size],
+                                           cols[: model_values.size])
+        # H.data's model part: the fault models' curvature, the same at every update
+        self.model_curvature = np.zeros(pattern.nnz)
+        np.add.at(self.model_curvature, model_position, model_values)
 
     def set_data(self, gram: np.ndarray, linear: np.ndarray, prior_information: np.ndarray,
                  prior_pct: np.ndarray) -> None:
@@ -255,7 +258,7 @@ class WindowQP:
         as prior_information Π⁻¹ (p, p) [1/%²] and prior_pct (p,) [%].
         """
         data = self.H.data
-        np.copyto(data, self._h_model_data)
+        np.copyto(data, self.model_curvature)
         data[self._block_position] += gram
         data[self._block_position[0]] += prior_information
         g = self.g
@@ -275,7 +278,7 @@ class WindowQP:
         return scale if np.isfinite(scale) and scale > 0.0 else 1.0
 
 
-def _positions(pattern: sp.csc_matrix, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+def pattern_positions(pattern: sp.csc_matrix, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """Index into pattern.data of each (row, col) entry; all entries must be in the pattern.
 
     A sorted CSC matrix lists its entries in increasing col·n + row, so one searchsorted
@@ -309,14 +312,24 @@ class _RowBuilder:
         self._in.append((columns, values, lower, upper, first_stage))
 
     @staticmethod
-    def _stage_order(groups: list) -> np.ndarray:
+    def _stages(groups: list) -> np.ndarray:
+        """The stage of every row, group by group."""
+        return np.concatenate([first + np.arange(columns.shape[0])
+                               for columns, *_, first in groups])
+
+    @classmethod
+    def _stage_order(cls, groups: list) -> np.ndarray:
         """Row permutation to time-major order (stage, then group), so that the KKT matrix
         stays banded: every group has one row per stage."""
-        stage = np.concatenate([first + np.arange(columns.shape[0])
-                                for columns, *_, first in groups])
         group = np.concatenate([np.full(columns.shape[0], k) for k, (columns, *_) in
                                 enumerate(groups)])
-        return np.lexsort((group, stage))
+        return np.lexsort((group, cls._stages(groups)))
+
+    def row_stages(self) -> np.ndarray:
+        """The stage of each row of [A; C], as assembled."""
+        return np.concatenate([self._stages(groups)[self._stage_order(groups)]
+                               for groups in (self._eq, self._in) if groups]
+                              or [np.zeros(0, dtype=int)])
 
     def _assemble(self, groups: list) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray]:
         if not groups:
