@@ -12,6 +12,8 @@ nodes' defaults for those sensors, and prints per fault:
 - bound: the Cramer-Rao deviation of a constant fault over one window of the estimator
   (fault_bound.window_fault_bound, the wind errors' Gauss-Markov model, the suite's
   calibrated noise), median over the fault-free flights' windows after settle_s;
+- the onset bound: on the default scenario, the RMS of the bound of an estimator told when
+  each fault starts (onset_bound), to hold its RMS against;
 - the default scenario's RMS error after settle_s, detection delay and false alarms;
 - the fault-free flights' largest estimate after settle_s and their RMS (the estimator's
   steady-state error, to hold against the bound);
@@ -79,13 +81,10 @@ def with_vanes(scenario: Scenario, vanes: bool) -> Scenario:
         scenario.sensors, air_data=True, vanes=vanes))
 
 
-def flight_bounds(scenario: Scenario) -> list[list[float]]:
-    """The bound (window_fault_bound) of each estimator window after SETTLE_S of the
-    fault-free flight, with the default residual and estimator settings for its sensors
-    (p per window) [%]."""
-    estimator = scenario_estimator_settings(scenario)
+def settled_samples(scenario: Scenario) -> list:
+    """The flight's residual samples (prediction.ResidualSample) after SETTLE_S on which
+    every row is valid, with the default residual settings for its sensors."""
     sampler = residual_sampler(ResidualSettings(vehicle=scenario.vehicle))
-    noise = load_noise_calibration("", scenario.vehicle)
     simulation = Simulation(scenario)
     sample, samples = simulation.sample(), []
     while True:
@@ -96,18 +95,51 @@ def flight_bounds(scenario: Scenario) -> list[list[float]]:
         if simulation.finished:
             break
         sample = simulation.step()
-    p, n = len(PAPER_FAULT_NAMES), estimator.horizon
+    return samples
+
+
+def window_bound(scenario: Scenario, window: list) -> np.ndarray:
+    """window_fault_bound of the window's samples with the estimator's defaults for the
+    scenario's sensors and the calibrated noise of its newest sample's suite (p,) [%]."""
+    estimator = scenario_estimator_settings(scenario)
+    noise = load_noise_calibration("", scenario.vehicle)
+    p = len(PAPER_FAULT_NAMES)
     wind_columns = slice(p, None) if estimator.estimate_wind_errors else slice(p, p)
-    bounds = []
-    for start in range(0, len(samples) - n + 1, WINDOW_STRIDE):
-        window = samples[start:start + n]
-        suite = SUITES[window[-1].wind_source]
-        variances = noise.variances[suite] / white_share(noise.correlations[suite])
-        sensitivity = np.array([s.sensitivity for s in window])
-        bounds.append(window_fault_bound(
-            sensitivity[:, :, :p], sensitivity[:, :, wind_columns], variances,
-            estimator.wind_error_sigma_mps, estimator.wind_error_coefficient).tolist())
-    return bounds
+    suite = SUITES[window[-1].wind_source]
+    variances = noise.variances[suite] / white_share(noise.correlations[suite])
+    sensitivity = np.array([s.sensitivity for s in window])
+    return window_fault_bound(sensitivity[:, :, :p], sensitivity[:, :, wind_columns], variances,
+                              estimator.wind_error_sigma_mps, estimator.wind_error_coefficient)
+
+
+def flight_bounds(scenario: Scenario) -> list[list[float]]:
+    """The bound (window_bound) of every WINDOW_STRIDE-th estimator window after SETTLE_S
+    of the fault-free flight (p per window) [%]."""
+    samples, horizon = settled_samples(scenario), scenario_estimator_settings(scenario).horizon
+    return [window_bound(scenario, samples[start:start + horizon]).tolist()
+            for start in range(0, len(samples) - horizon + 1, WINDOW_STRIDE)]
+
+
+def onset_bound(scenario: Scenario) -> list[float]:
+    """Per fault, the RMS over the faulted flight's samples after SETTLE_S of the bound of
+    an estimator told when the fault starts: at each sample, window_bound over the
+    estimator's window cut at the fault's start (the fault constant since; for a ramp,
+    at its level, where one told the ramp's shape could do better) [%]. What the
+    onsets cost any estimator, to hold the RMS of a faulted flight against."""
+    samples, horizon = settled_samples(scenario), scenario_estimator_settings(scenario).horizon
+    starts_s = {fault.name: fault.start_s for fault in scenario.faults}
+    squares = np.zeros(len(PAPER_FAULT_NAMES))
+    for k, sample in enumerate(samples):
+        window = samples[max(0, k + 1 - horizon):k + 1]
+        whole = window_bound(scenario, window)
+        for j, name in enumerate(PAPER_FAULT_NAMES):
+            start_s = starts_s.get(name, np.inf)
+            if window[0].time_s <= start_s < sample.time_s:  # started within the window
+                since = [s for s in window if s.time_s > start_s]
+                squares[j] += window_bound(scenario, since)[j] ** 2
+            else:
+                squares[j] += whole[j] ** 2
+    return np.sqrt(squares / len(samples)).round(3).tolist()
 
 
 def estimated(scenario: Scenario) -> dict:
@@ -124,12 +156,13 @@ def estimated(scenario: Scenario) -> dict:
             "flow_angle_rms_deg": flow_angle_rms_deg(estimates, SETTLE_S)}
 
 
-def summarise(bounds: list, flights: list, seeds: int) -> dict:
-    """Per vehicle and suite: per fault the bound, the default scenario's RMS, delay and
-    whether it false-alarmed, the fault-free flights' largest estimate and RMS; the
-    default's flow-angle RMS; and per held-out seed its figures. bounds: per (vehicle,
-    suite) its seeds fault-free flights'; flights: per (vehicle, suite) its default
-    scenario's, its fault-free flights', then its held-out flights'."""
+def summarise(bounds: list, onsets: list, flights: list, seeds: int) -> dict:
+    """Per vehicle and suite: per fault the bound, the default scenario's onset bound, RMS,
+    delay and whether it false-alarmed, the fault-free flights' largest estimate and RMS;
+    the default's flow-angle RMS; and per held-out seed its figures. bounds: per (vehicle,
+    suite) its seeds fault-free flights'; onsets: per (vehicle, suite) its default
+    scenario's; flights: per (vehicle, suite) its default scenario's, its fault-free
+    flights', then its held-out flights'."""
     summary: dict = {}
     cells = [(vehicle, suite) for vehicle in VEHICLES for suite in SUITE_VANES]
     per_cell = 1 + seeds + len(HELD_OUT_DIRECTIONS_DEG)
@@ -140,6 +173,7 @@ def summarise(bounds: list, flights: list, seeds: int) -> dict:
         summary.setdefault(vehicle, {})[suite] = {
             "faults": {
                 name: {"bound_pct": round(float(np.median(windows[:, j])), 2),
+                       "onset_bound_pct": onsets[k][j],
                        "rmse_pct": default["faults"][name]["rmse_pct"],
                        "delay_s": default["faults"][name]["detection_delay_s"],
                        "false_alarm": name in default["false_alarms"],
@@ -161,7 +195,8 @@ def summarise(bounds: list, flights: list, seeds: int) -> dict:
 
 
 # The table's per-fault columns before and after the false alarms, and their formats
-_COLUMNS = (("bound_pct", ".2f"), ("rmse_pct", ".2f"), ("delay_s", "g"),
+_COLUMNS = (("bound_pct", ".2f"), ("onset_bound_pct", ".2f"), ("rmse_pct", ".2f"),
+            ("delay_s", "g"),
             ("fault_free_largest_pct", ".2f"), ("fault_free_rmse_pct", ".2f"))
 
 
@@ -171,15 +206,15 @@ def _per_fault(faults: dict, key: str, form: str) -> str:
 
 
 def print_table(summary: dict) -> None:
-    print("| vehicle | sensors | bound [%] | rmse [%] | delay [s] | false alarms | "
-          "fault-free largest [%] | fault-free rmse [%] | flow angles [deg] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| vehicle | sensors | bound [%] | onset bound [%] | rmse [%] | delay [s] | "
+          "false alarms | fault-free largest [%] | fault-free rmse [%] | flow angles [deg] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for vehicle, suites in summary.items():
         for suite, cell in suites.items():
             faults = cell["faults"]
             alarms = ", ".join(n for n, v in faults.items() if v["false_alarm"]) or "none"
             cells = [_per_fault(faults, key, form) for key, form in _COLUMNS]
-            cells.insert(3, alarms)
+            cells.insert(4, alarms)
             print(f"| {vehicle} | {suite} | " + " | ".join(cells)
                   + f" | {cell['flow_angle_rms_deg'] or '-'} |")
     print("\nHeld-out seeds of the default scenario")
@@ -201,18 +236,20 @@ def main() -> int:
     add_campaign_arguments(parser)
     arguments = parser.parse_args()
     started = time.monotonic()
-    free, flown = [], []
+    free, defaults, flown = [], [], []
     for vehicle in VEHICLES:
         quiet = fault_free_flights(arguments.seeds, FIRST_SEED, vehicle=vehicle)
         faulted = load_scenario(vehicle_scenario_path(vehicle, "default"))
         for vanes in SUITE_VANES.values():
             free += [with_vanes(s, vanes) for s in quiet]
+            defaults.append(with_vanes(faulted, vanes))
             flown += [with_vanes(s, vanes)
                       for s in (faulted, *quiet, *held_out_flights(faulted))]
     with Campaign(campaign_options(arguments)) as campaign:
         bounds = campaign.results(flight_bounds, free, "bound flights")
+        onsets = campaign.results(onset_bound, defaults, "onset bounds")
         flights = campaign.results(estimated, flown, "estimated flights")
-    summary = summarise(bounds, flights, arguments.seeds)
+    summary = summarise(bounds, onsets, flights, arguments.seeds)
     print_table(summary)
     print(f"\n{len(free) + len(flown)} flights in {time.monotonic() - started:.0f} s")
     if arguments.json:
