@@ -81,7 +81,7 @@ class EstimatorSettings:
     arrival_centre: str = setting(
         "where the arrival cost is centred: filter (the arrival filter's mean) or "
         "previous_window (the previous window's estimate, as the paper)", "filter")
-    # off by default: with vanes the columns are 0 and only cost solve time (0.79 against
+    # off by default: with vanes the columns are 0 and only cost solve time (0.86 against
     # 0.47 ms median on the default flight, docs/estimator.md); on for a pitot without vanes
     estimate_wind_errors: bool = setting(
         "also estimate the errors of the wind the models flew (S columns *_error of "
@@ -101,7 +101,7 @@ class EstimatorSettings:
         "proxsuite (any fault model) or active_set (exact, for monotonic faults only; "
         "ProxSuite solves the windows where it does not settle in 30 rounds)", "proxsuite")
     solver_eps_abs: float = setting("ProxSuite's absolute tolerance (on the scaled problem)",
-                                    1e-6, 1e-12, 0.1, live=True)
+                                    SolverSettings.eps_abs, 1e-12, 0.1, live=True)
     solver_max_iter: int = setting("ProxSuite's iteration limit per update", 200, 1, 100000,
                                    live=True)
     update_budget_ms: float = setting(
