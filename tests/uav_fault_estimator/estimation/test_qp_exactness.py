@@ -14,7 +14,7 @@ from uav_fault_estimator.estimation.fault_models import (
     RandomWalk,
     UniformIncrements,
 )
-from uav_fault_estimator.estimation.proxqp_solver import ProxQPSolver
+from uav_fault_estimator.estimation.proxqp_solver import LiftedWindow, ProxQPSolver
 from uav_fault_estimator.estimation.qp_problem import WindowQP, stage_normal_equations
 from uav_fault_estimator.estimation.reference_solution import solve_reference
 from uav_fault_estimator.estimation.solve_status import SolveStatus
@@ -86,3 +86,30 @@ def test_proxsuite_matches_clarabel(case: str, bounded: bool) -> None:
         worst = max(worst, deviation)
         print(f"{case} bounded={bounded} seed={seed}: rel dev {deviation:.2e}, {iterations} it")
     assert worst <= 1e-6
+
+
+@pytest.mark.timeout(30)
+def test_proxsuite_gets_a_stage_diagonal_hessian_and_time_major_rows() -> None:
+    """What keeps ProxSuite's factor banded (LiftedWindow): no entry of its H ties two
+    stages (a random walk's increments are variables of their own, tied by rows), and its
+    rows come stage by stage; a guess goes there and back unchanged."""
+    problem = random_problem(CASES["mix_all"], seed=0, bounded=True, lost_fraction=0.1)
+    lifted = LiftedWindow(problem)
+    assert problem.H[problem.f_index[1:].ravel()][:, problem.f_index[:-1].ravel()].nnz > 0
+    stage = np.full(lifted.n_variables, -1)
+    stage[problem.f_index] = np.arange(problem.stages)[:, None]
+    rows, cols = lifted.H.nonzero()
+    coupled = (rows != cols) & ((stage[rows] != stage[cols]) | (stage[rows] < 0))
+    assert not coupled.any()
+    walks = sum(term.quadratic_weight > 0.0 for term in problem.increment_terms)
+    assert lifted.n_variables == problem.n_variables + walks * (problem.stages - 1)
+    c = lifted.C.tocsr()
+    row_stage = [stage[c.indices[c.indptr[i]:c.indptr[i + 1]]].max() for i in range(c.shape[0])]
+    assert np.all(np.diff(row_stage) >= -1)  # a row's latest stage: at most one back
+    rng = np.random.default_rng(1)
+    x, y, z = (rng.normal(size=size) for size in
+               (problem.n_variables, problem.b.size, problem.l.size))
+    lifted_x, lifted_z = lifted.lift(x, y, z)
+    back = lifted.lower(lifted_x, lifted_z)
+    for returned, given in zip(back, (x, y, z), strict=True):
+        np.testing.assert_array_equal(returned, given)
