@@ -12,6 +12,8 @@ nodes' defaults for those sensors, and prints per fault:
 - bound: the Cramer-Rao deviation of a constant fault over one window of the estimator
   (fault_bound.window_fault_bound, the wind errors' Gauss-Markov model, the suite's
   calibrated noise), median over the fault-free flights' windows after settle_s;
+- the bound of the two wings' faults of one kind moving together (their mean) and apart
+  (their half difference);
 - the onset bound: on the default scenario, the RMS of the bound of an estimator told when
   each fault starts (onset_bound), to hold its RMS against;
 - the default scenario's RMS error after settle_s, detection delay and false alarms;
@@ -51,7 +53,7 @@ from uav_fault_estimator.chain.offline import (
     wind_variant,
 )
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
-from uav_fault_estimator.estimation.fault_bound import window_fault_bound
+from uav_fault_estimator.estimation.fault_bound import pair_bounds, window_fault_covariance
 from uav_fault_estimator.estimation.noise_model import SUITES, load_noise_calibration, white_share
 from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
@@ -63,6 +65,10 @@ VEHICLES = ("aerosonde", "carbon_z")
 SUITE_VANES = {"vanes": True, "pitot": False}  # the suites compared: air data with or without
 FIRST_SEED = 601
 WINDOW_STRIDE = 10  # samples between the windows whose bound is taken
+# The two wings' faults of one kind: what moves them together (an angle of attack's error
+# can) and what moves them apart (the rolling and yawing moments)
+PAIRS = {"lift": ("right_wing_lift_loss", "left_wing_lift_loss"),
+         "drag": ("right_wing_drag_increase", "left_wing_drag_increase")}
 HELD_OUT_FIRST_SEED = 611
 HELD_OUT_DIRECTIONS_DEG = (45.0, 165.0, 285.0)
 HELD_OUT_WIND_SHARE = 0.22  # of the airspeed
@@ -98,9 +104,9 @@ def settled_samples(scenario: Scenario) -> list:
     return samples
 
 
-def window_bound(scenario: Scenario, window: list) -> np.ndarray:
-    """window_fault_bound of the window's samples with the estimator's defaults for the
-    scenario's sensors and the calibrated noise of its newest sample's suite (p,) [%]."""
+def window_covariance(scenario: Scenario, window: list) -> np.ndarray:
+    """window_fault_covariance of the window's samples with the estimator's defaults for the
+    scenario's sensors and the calibrated noise of its newest sample's suite (p, p) [%^2]."""
     estimator = scenario_estimator_settings(scenario)
     noise = load_noise_calibration("", scenario.vehicle)
     p = len(PAPER_FAULT_NAMES)
@@ -108,16 +114,27 @@ def window_bound(scenario: Scenario, window: list) -> np.ndarray:
     suite = SUITES[window[-1].wind_source]
     variances = noise.variances[suite] / white_share(noise.correlations[suite])
     sensitivity = np.array([s.sensitivity for s in window])
-    return window_fault_bound(sensitivity[:, :, :p], sensitivity[:, :, wind_columns], variances,
-                              estimator.wind_error_sigma_mps, estimator.wind_error_coefficient)
+    return window_fault_covariance(
+        sensitivity[:, :, :p], sensitivity[:, :, wind_columns], variances,
+        estimator.wind_error_sigma_mps, estimator.wind_error_coefficient)
+
+
+def window_bound(scenario: Scenario, window: list) -> np.ndarray:
+    """The deviation of each fault over the window (window_covariance) (p,) [%]."""
+    return np.sqrt(np.diag(window_covariance(scenario, window)))
 
 
 def flight_bounds(scenario: Scenario) -> list[list[float]]:
-    """The bound (window_bound) of every WINDOW_STRIDE-th estimator window after SETTLE_S
-    of the fault-free flight (p per window) [%]."""
+    """Of every WINDOW_STRIDE-th estimator window after SETTLE_S of the fault-free flight,
+    the bound of each fault (p), then of each PAIRS pair's mean and half difference [%]."""
     samples, horizon = settled_samples(scenario), scenario_estimator_settings(scenario).horizon
-    return [window_bound(scenario, samples[start:start + horizon]).tolist()
-            for start in range(0, len(samples) - horizon + 1, WINDOW_STRIDE)]
+    bounds = []
+    for start in range(0, len(samples) - horizon + 1, WINDOW_STRIDE):
+        covariance = window_covariance(scenario, samples[start:start + horizon])
+        pairs = [pair_bounds(covariance, *(PAPER_FAULT_NAMES.index(name) for name in pair))
+                 for pair in PAIRS.values()]
+        bounds.append([*np.sqrt(np.diag(covariance)), *np.ravel(pairs)])
+    return bounds
 
 
 def onset_bound(scenario: Scenario) -> list[float]:
@@ -170,6 +187,7 @@ def summarise(bounds: list, onsets: list, flights: list, seeds: int) -> dict:
         windows = np.concatenate([np.array(b) for b in bounds[k * seeds:(k + 1) * seeds]])
         default, *others = flights[k * per_cell:(k + 1) * per_cell]
         free, held_out = others[:seeds], others[seeds:]
+        pairs = windows[:, len(PAPER_FAULT_NAMES):]  # flight_bounds' pair columns
         summary.setdefault(vehicle, {})[suite] = {
             "faults": {
                 name: {"bound_pct": round(float(np.median(windows[:, j])), 2),
@@ -182,6 +200,10 @@ def summarise(bounds: list, onsets: list, flights: list, seeds: int) -> dict:
                        "fault_free_rmse_pct": round(max(
                            f["faults"][name]["rmse_pct"] for f in free), 2)}
                 for j, name in enumerate(PAPER_FAULT_NAMES)},
+            "pairs": {kind: {"mean_bound_pct": round(float(np.median(pairs[:, 2 * i])), 2),
+                             "half_difference_bound_pct": round(float(np.median(
+                                 pairs[:, 2 * i + 1])), 2)}
+                      for i, kind in enumerate(PAIRS)},
             "flow_angle_rms_deg": default["flow_angle_rms_deg"],
             "held_out": [
                 {"seed": HELD_OUT_FIRST_SEED + i,
@@ -217,6 +239,12 @@ def print_table(summary: dict) -> None:
             cells.insert(4, alarms)
             print(f"| {vehicle} | {suite} | " + " | ".join(cells)
                   + f" | {cell['flow_angle_rms_deg'] or '-'} |")
+    print("\nThe two wings' faults of one kind: bound of their mean / of their half difference")
+    for vehicle, suites in summary.items():
+        for suite, cell in suites.items():
+            print(f"| {vehicle} | {suite} | " + " | ".join(
+                f"{kind} {v['mean_bound_pct']:.2f} / {v['half_difference_bound_pct']:.2f}"
+                for kind, v in cell["pairs"].items()) + " |")
     print("\nHeld-out seeds of the default scenario")
     print("| vehicle | sensors | seed | rmse [%] | delay [s] | false alarms | flow angles [deg] |")
     print("|---|---|---|---|---|---|---|")

@@ -182,6 +182,16 @@ def vaneless_bound(data: Mapping[str, Any]) -> list[str]:
     lines += table(("vehicle", "sensors", "fault", "bound [%]", "onset bound [%]", "RMS [%]",
                     "delay [s]",
                     "false alarm", "fault-free largest [%]", "fault-free RMS [%]"), rows)
+    lines += ["The two wings' faults of one kind: the bound (median over the fault-free "
+              "flights' windows, as above) of their mean, which a flow angle's error "
+              "moves as well, and of their half difference, which the rolling and yawing "
+              "moments tell.", ""]
+    lines += table(("vehicle", "sensors", "lift: mean [%]", "lift: half difference [%]",
+                    "drag: mean [%]", "drag: half difference [%]"), (
+        (vehicle, suite, *(cell.get("pairs", {}).get(kind, {}).get(key)
+                           for kind in ("lift", "drag")
+                           for key in ("mean_bound_pct", "half_difference_bound_pct")))
+        for vehicle, suites in summary.items() for suite, cell in suites.items()))
     lines += ["The default scenario on held-out seeds (turbulence, noise and a background wind "
               f"of {number(100 * (data.get('held_out_wind_share') or 0))} % of the airspeed "
               "from another direction; no setting was tuned on them), per fault in the order "

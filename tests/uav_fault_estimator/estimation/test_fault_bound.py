@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from uav_fault_estimator.estimation.fault_bound import window_fault_bound
+from uav_fault_estimator.estimation.fault_bound import pair_bounds, window_fault_bound
 
 
 @pytest.mark.timeout(30)
@@ -31,3 +31,14 @@ def test_a_wind_error_that_mimics_the_fault_widens_the_bound_as_its_prior_loosen
     wind_covariance = 0.01**2 / (1 - 0.9**2) * 0.9**lags
     exact = np.sqrt(1.0 / np.sum(np.linalg.inv(np.eye(n) + wind_covariance)))
     assert tight == pytest.approx(exact)
+
+
+@pytest.mark.timeout(30)
+def test_two_faults_that_move_together_are_known_apart_and_not_together():
+    """Two faults of unit variance, correlated 0.9 (what one unknown moves both by): their
+    mean's variance is (1 + 1 + 1.8) / 4, their half difference's (1 + 1 - 1.8) / 4; a third
+    fault does not enter."""
+    covariance = np.array([[1.0, 0.9, 0.0], [0.9, 1.0, 0.0], [0.0, 0.0, 100.0]])
+    mean, half_difference = pair_bounds(covariance, 0, 1)
+    assert mean == pytest.approx(np.sqrt(0.95))
+    assert half_difference == pytest.approx(np.sqrt(0.05))

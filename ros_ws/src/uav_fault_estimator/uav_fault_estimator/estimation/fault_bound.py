@@ -17,10 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 
-def window_fault_bound(fault_sensitivity: np.ndarray, wind_sensitivity: np.ndarray,
-                       noise_variances: np.ndarray, wind_sigma_mps: float,
-                       wind_coefficient: float) -> np.ndarray:
-    """The Cramer-Rao deviation of each constant fault over the window (p,) [%].
+def window_fault_covariance(fault_sensitivity: np.ndarray, wind_sensitivity: np.ndarray,
+                            noise_variances: np.ndarray, wind_sigma_mps: float,
+                            wind_coefficient: float) -> np.ndarray:
+    """The Cramer-Rao covariance J^-1 of the constant faults over the window (p, p) [%^2].
 
     Inputs: fault_sensitivity (N, m, p) [residual unit / %] and wind_sensitivity (N, m, w)
     [residual unit per m/s] of the window's samples (w may be 0: no wind errors, or all
@@ -39,4 +39,25 @@ def window_fault_bound(fault_sensitivity: np.ndarray, wind_sensitivity: np.ndarr
         covariance += stacked @ wind_covariance @ stacked.T
     faults = fault_sensitivity.reshape(samples * rows, -1)
     information = faults.T @ np.linalg.solve(covariance, faults)
-    return np.sqrt(np.diag(np.linalg.inv(information)))
+    return np.linalg.inv(information)
+
+
+def window_fault_bound(fault_sensitivity: np.ndarray, wind_sensitivity: np.ndarray,
+                       noise_variances: np.ndarray, wind_sigma_mps: float,
+                       wind_coefficient: float) -> np.ndarray:
+    """The Cramer-Rao deviation of each constant fault over the window (p,) [%]: the root of
+    window_fault_covariance's diagonal (same inputs)."""
+    return np.sqrt(np.diag(window_fault_covariance(
+        fault_sensitivity, wind_sensitivity, noise_variances, wind_sigma_mps,
+        wind_coefficient)))
+
+
+def pair_bounds(covariance: np.ndarray, first: int, second: int) -> tuple[float, float]:
+    """The deviation of the mean (f_first + f_second) / 2 and of the half difference
+    (f_first - f_second) / 2 of two faults [%] under a fault covariance (p, p) [%^2]: for the
+    two wings' faults of one kind, what moves them together (symmetric) and apart."""
+    mean, half_difference = np.zeros(len(covariance)), np.zeros(len(covariance))
+    mean[[first, second]] = 0.5
+    half_difference[[first, second]] = 0.5, -0.5
+    return (float(np.sqrt(mean @ covariance @ mean)),
+            float(np.sqrt(half_difference @ covariance @ half_difference)))
