@@ -66,8 +66,9 @@ class LiftedWindow:
         delta = n + np.arange(increments)
         self.problem = problem
 
-        # H: the WindowQP's entries within a stage, less the increments' curvature, and
-        # w on every increment
+        # H: the WindowQP's entries within a stage, less the increments' curvature (all of
+        # the WindowQP's model curvature is its quadratic increment costs), and w on every
+        # increment
         stage_of = np.full(n, -1)
         stage_of[problem.f_index] = np.arange(stages)[:, None]
         h = problem.H

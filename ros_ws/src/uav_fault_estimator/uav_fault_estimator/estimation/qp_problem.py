@@ -245,7 +245,9 @@ class WindowQP:
         self._diagonal_position = pattern_positions(pattern, on_diagonal, on_diagonal)
         model_position = pattern_positions(pattern, rows[: model_values.size],
                                            cols[: model_values.size])
-        # H.data's model part: the fault models' curvature, the same at every update
+        # H.data's model part: the fault models' curvature (their quadratic increment
+        # costs, proxqp_solver.LiftedWindow moves onto increment variables), the same at
+        # every update
         self.model_curvature = np.zeros(pattern.nnz)
         np.add.at(self.model_curvature, model_position, model_values)
 
