@@ -52,6 +52,7 @@ from uav_fault_estimator.chain.offline import (
     scenario_estimator_settings,
     wind_variant,
 )
+from uav_fault_estimator.estimation.estimator_settings import EstimatorSettings
 from uav_fault_estimator.estimation.estimator_step import SETTLE_S
 from uav_fault_estimator.estimation.fault_bound import pair_bounds, window_fault_covariance
 from uav_fault_estimator.estimation.noise_model import SUITES, load_noise_calibration, white_share
@@ -104,33 +105,45 @@ def settled_samples(scenario: Scenario) -> list:
     return samples
 
 
-def window_covariance(scenario: Scenario, window: list) -> np.ndarray:
-    """window_fault_covariance of the window's samples with the estimator's defaults for the
-    scenario's sensors and the calibrated noise of its newest sample's suite (p, p) [%^2]."""
-    estimator = scenario_estimator_settings(scenario)
-    noise = load_noise_calibration("", scenario.vehicle)
-    p = len(PAPER_FAULT_NAMES)
-    wind_columns = slice(p, None) if estimator.estimate_wind_errors else slice(p, p)
-    suite = SUITES[window[-1].wind_source]
-    variances = noise.variances[suite] / white_share(noise.correlations[suite])
-    sensitivity = np.array([s.sensitivity for s in window])
-    return window_fault_covariance(
-        sensitivity[:, :, :p], sensitivity[:, :, wind_columns], variances,
-        estimator.wind_error_sigma_mps, estimator.wind_error_coefficient)
+@dataclasses.dataclass(frozen=True)
+class BoundModel:
+    """What the bound of a flight's windows takes, read once per flight: the estimator's
+    defaults for the scenario's sensors and each suite's calibrated white noise."""
 
+    estimator: EstimatorSettings
+    white_variances: dict[str, np.ndarray]
 
-def window_bound(scenario: Scenario, window: list) -> np.ndarray:
-    """The deviation of each fault over the window (window_covariance) (p,) [%]."""
-    return np.sqrt(np.diag(window_covariance(scenario, window)))
+    @classmethod
+    def of(cls, scenario: Scenario) -> BoundModel:
+        noise = load_noise_calibration("", scenario.vehicle)
+        return cls(scenario_estimator_settings(scenario), {
+            suite: noise.variances[suite] / white_share(noise.correlations[suite])
+            for suite in noise.variances})
+
+    def covariance(self, window: list) -> np.ndarray:
+        """window_fault_covariance of the window's samples, the noise of its newest
+        sample's suite (p, p) [%^2]."""
+        p = len(PAPER_FAULT_NAMES)
+        wind_columns = slice(p, None) if self.estimator.estimate_wind_errors else slice(p, p)
+        sensitivity = np.array([s.sensitivity for s in window])
+        return window_fault_covariance(
+            sensitivity[:, :, :p], sensitivity[:, :, wind_columns],
+            self.white_variances[SUITES[window[-1].wind_source]],
+            self.estimator.wind_error_sigma_mps, self.estimator.wind_error_coefficient)
+
+    def bound(self, window: list) -> np.ndarray:
+        """The deviation of each fault over the window (p,) [%]."""
+        return np.sqrt(np.diag(self.covariance(window)))
 
 
 def flight_bounds(scenario: Scenario) -> list[list[float]]:
     """Of every WINDOW_STRIDE-th estimator window after SETTLE_S of the fault-free flight,
     the bound of each fault (p), then of each PAIRS pair's mean and half difference [%]."""
-    samples, horizon = settled_samples(scenario), scenario_estimator_settings(scenario).horizon
+    model, samples = BoundModel.of(scenario), settled_samples(scenario)
+    horizon = model.estimator.horizon
     bounds = []
     for start in range(0, len(samples) - horizon + 1, WINDOW_STRIDE):
-        covariance = window_covariance(scenario, samples[start:start + horizon])
+        covariance = model.covariance(samples[start:start + horizon])
         pairs = [pair_bounds(covariance, *(PAPER_FAULT_NAMES.index(name) for name in pair))
                  for pair in PAIRS.values()]
         bounds.append([*np.sqrt(np.diag(covariance)), *np.ravel(pairs)])
@@ -139,21 +152,22 @@ def flight_bounds(scenario: Scenario) -> list[list[float]]:
 
 def onset_bound(scenario: Scenario) -> list[float]:
     """Per fault, the RMS over the faulted flight's samples after SETTLE_S of the bound of
-    an estimator told when the fault starts: at each sample, window_bound over the
+    an estimator told when the fault starts: at each sample, BoundModel.bound over the
     estimator's window cut at the fault's start (the fault constant since; for a ramp,
     at its level, where one told the ramp's shape could do better) [%]. What the
     onsets cost any estimator, to hold the RMS of a faulted flight against."""
-    samples, horizon = settled_samples(scenario), scenario_estimator_settings(scenario).horizon
+    model, samples = BoundModel.of(scenario), settled_samples(scenario)
+    horizon = model.estimator.horizon
     starts_s = {fault.name: fault.start_s for fault in scenario.faults}
     squares = np.zeros(len(PAPER_FAULT_NAMES))
     for k, sample in enumerate(samples):
         window = samples[max(0, k + 1 - horizon):k + 1]
-        whole = window_bound(scenario, window)
+        whole = model.bound(window)
         for j, name in enumerate(PAPER_FAULT_NAMES):
             start_s = starts_s.get(name, np.inf)
             if window[0].time_s <= start_s < sample.time_s:  # started within the window
                 since = [s for s in window if s.time_s > start_s]
-                squares[j] += window_bound(scenario, since)[j] ** 2
+                squares[j] += model.bound(since)[j] ** 2
             else:
                 squares[j] += whole[j] ** 2
     return np.sqrt(squares / len(samples)).round(3).tolist()
