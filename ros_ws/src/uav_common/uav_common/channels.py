@@ -42,6 +42,7 @@ STATE_UNITS: tuple[str, ...] = (
 # are AIR_DATA_FIELDS (the airspeed field says that it is the true airspeed).
 VANE_CHANNELS: tuple[str, ...] = ("angle_of_attack", "sideslip")  # a flow-angle vane's
 AIR_DATA_CHANNELS: tuple[str, ...] = ("airspeed", *VANE_CHANNELS)
+AIRSPEED_INDEX = AIR_DATA_CHANNELS.index("airspeed")  # the airspeed's index in an air-data vector
 AIR_DATA_FIELDS: tuple[str, ...] = ("true_airspeed_mps", "angle_of_attack_rad", "sideslip_rad")
 # Channels a scenario's sensor_dropouts may name.
 DROPOUT_CHANNELS: tuple[str, ...] = STATE_CHANNELS + AIR_DATA_CHANNELS

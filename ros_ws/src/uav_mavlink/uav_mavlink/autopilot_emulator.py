@@ -22,7 +22,7 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from uav_aircraft.airframe import CONTROLS, Airframe, outputs_of_controls
 from uav_aircraft.frames import north_east_m
-from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, STATE_CHANNELS
+from uav_common.channels import AIRSPEED_INDEX, CONTROL_CHANNELS, STATE_CHANNELS
 
 from uav_mavlink.autopilot_messages import SERVO_OUTPUTS
 from uav_mavlink.stream_rates import ARDUPILOT, PX4
@@ -48,7 +48,6 @@ _VELOCITY_ONLY = 1 | 2 | 4 | 64 | 128 | 256 | 1024 | 2048
 _MESSAGES = {ARDUPILOT: frozenset(ARDUPLANE_DEFAULT_HZ), PX4: frozenset(PX4_ONBOARD_HZ)}
 _STATE = {name: index for index, name in enumerate(STATE_CHANNELS)}
 _EULER, _RATES = ("roll", "pitch", "yaw"), ("roll_rate", "pitch_rate", "yaw_rate")
-_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 _AUTO_MODE = {ARDUPILOT: 10, PX4: (4 << 16) | (4 << 24)}  # PLANE_MODE AUTO; PX4 AUTO.MISSION
 _AUTOPILOT = {ARDUPILOT: mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, PX4: mavlink.MAV_AUTOPILOT_PX4}
 
@@ -74,7 +73,7 @@ def flight_sample(time_s: float, state: np.ndarray, controls: np.ndarray,
     air data or None, the wind NED [m/s], setpoints: uav_common.channels orders). Without
     a usable airspeed (no air data, or NaN) the autopilot's is the synthetic one an
     autopilot without a pitot flies on: the ground velocity less the wind [m/s]."""
-    airspeed_mps = math.nan if air_data is None else float(air_data[_AIRSPEED])
+    airspeed_mps = math.nan if air_data is None else float(air_data[AIRSPEED_INDEX])
     if not math.isfinite(airspeed_mps):
         velocity = state[[_STATE[f"velocity_{axis}"] for axis in ("north", "east", "down")]]
         airspeed_mps = float(np.linalg.norm(velocity - wind_ned_mps))

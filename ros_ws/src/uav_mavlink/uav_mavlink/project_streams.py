@@ -20,13 +20,17 @@ from dataclasses import dataclass
 
 import numpy as np
 from uav_aircraft.airframe import CONTROLS, MAX_OUTPUTS, Airframe, control_values
-from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, UNREPORTED_CONTROLS
+from uav_common.channels import (
+    AIR_DATA_CHANNELS,
+    AIRSPEED_INDEX,
+    CONTROL_CHANNELS,
+    UNREPORTED_CONTROLS,
+)
 from uav_common.filters import LowPass
 
 from uav_mavlink.sample_assembly import Sample
 
 _CONTROL_INDEX = [CONTROL_CHANNELS.index(name) for name in CONTROLS]
-_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
 @dataclass(frozen=True)
@@ -61,7 +65,7 @@ class StreamConversion:
         for index, value in UNREPORTED_CONTROLS.items():
             controls[index] = value
         air_data = np.full(len(AIR_DATA_CHANNELS), math.nan)
-        air_data[_AIRSPEED] = sample.airspeed_mps
+        air_data[AIRSPEED_INDEX] = sample.airspeed_mps
         return Streams(sample.state, controls, air_data, self._filtered_wind(sample),
                        sample.setpoints)
 

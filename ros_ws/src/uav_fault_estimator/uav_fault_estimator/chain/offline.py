@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 from uav_aircraft.flown_aircraft import NOMINAL, FlownAircraft
 from uav_aircraft.vehicles import DEFAULT_VEHICLE
-from uav_common.channels import AIR_DATA_CHANNELS, FAULT_NAMES
+from uav_common.channels import AIRSPEED_INDEX, FAULT_NAMES
 from uav_common.sample_grid import on_grid
 from uav_common.settings import settings_from
 from uav_sim.scenario import Scenario, load_scenario, vehicle_scenario_path
@@ -33,8 +33,6 @@ from uav_fault_estimator.estimation.prediction import residual_sampler
 from uav_fault_estimator.estimation.residual_settings import ResidualSettings
 from uav_fault_estimator.estimation.residuals import WIND_PITOT, ResidualSample
 from uav_fault_estimator.reporting.metrics import EstimateSeries, SeededSeries
-
-_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
 def fly_and_estimate(
@@ -147,7 +145,7 @@ def fly_on_grid(scenario: Scenario, period_s: float) -> GridFlight:
     return GridFlight(np.array([s.time_s for s in samples]), np.array([s.state for s in samples]),
                       np.array([s.controls for s in samples]),
                       np.array([s.seeded_faults_pct for s in samples]),
-                      np.array([math.nan if s.air_data is None else s.air_data[_AIRSPEED]
+                      np.array([math.nan if s.air_data is None else s.air_data[AIRSPEED_INDEX]
                                 for s in samples]),
                       np.array([s.setpoints for s in samples]))
 

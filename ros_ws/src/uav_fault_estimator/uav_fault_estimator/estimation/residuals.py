@@ -52,7 +52,7 @@ import numpy as np
 from uav_aircraft.flown_aircraft import NO_BIAS, SensorBias, true_air_data
 from uav_aircraft.frames import ned_to_body, wind_triangle_ned_mps
 from uav_aircraft.vehicles import AirDataRange
-from uav_common.channels import AIR_DATA_CHANNELS, STATE_CHANNELS, state_indices
+from uav_common.channels import AIRSPEED_INDEX, STATE_CHANNELS, state_indices
 from uav_common.filters import LowPass, SettlingLowPass
 from uav_common.sample_grid import GRID_TOLERANCE_S
 
@@ -104,7 +104,6 @@ BRIDGED_GAP_S = 0.2
 WIND_FILTERED, WIND_AIR_DATA, WIND_PITOT = 0, 1, 2
 WIND_SOURCE_NAMES = {WIND_FILTERED: "filtered wind", WIND_AIR_DATA: "air data",
                      WIND_PITOT: "pitot"}
-_AIRSPEED = AIR_DATA_CHANNELS.index("airspeed")
 
 
 def air_data_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | None) -> bool:
@@ -120,10 +119,10 @@ def air_data_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | 
 def pitot_usable(air_data: np.ndarray | None, air_data_range: AirDataRange | None) -> bool:
     """Whether a measured air data's airspeed [m/s] alone is finite and within the model's
     airspeed range (air_data_usable's, for the airspeed)."""
-    if air_data is None or not np.isfinite(air_data[_AIRSPEED]):
+    if air_data is None or not np.isfinite(air_data[AIRSPEED_INDEX]):
         return False
-    low, high = (-math.inf, math.inf) if air_data_range is None else air_data_range[_AIRSPEED]
-    return bool(low <= air_data[_AIRSPEED] <= high)
+    low, high = (-math.inf, math.inf) if air_data_range is None else air_data_range[AIRSPEED_INDEX]
+    return bool(low <= air_data[AIRSPEED_INDEX] <= high)
 
 
 def pitot_wind_ned_mps(velocity_ned_mps: np.ndarray, wind_ned_mps: np.ndarray,
@@ -280,7 +279,7 @@ class ResidualGenerator:
         if self.wind_source == WIND_AIR_DATA:
             return None
         shifted = wind + column.wind_shift_mps
-        return (pitot_wind_ned_mps(state[VELOCITY[:3]], shifted, air_data[_AIRSPEED])
+        return (pitot_wind_ned_mps(state[VELOCITY[:3]], shifted, air_data[AIRSPEED_INDEX])
                 if self.wind_source == WIND_PITOT else shifted)
 
     def _prediction(self, state: np.ndarray, controls: np.ndarray, wind: np.ndarray,
@@ -360,7 +359,7 @@ class ResidualGenerator:
             wind = _air_data_wind(state, air_data, self.sensor_bias)
             self.wind_source = WIND_AIR_DATA
         elif pitot_usable(air_data, self.air_data_range):
-            wind = pitot_wind_ned_mps(state[VELOCITY[:3]], wind, air_data[_AIRSPEED])
+            wind = pitot_wind_ned_mps(state[VELOCITY[:3]], wind, air_data[AIRSPEED_INDEX])
             self.wind_source = WIND_PITOT
         else:
             air_data = None

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 from pymavlink.DFReader import FORMAT_TO_STRUCT
 from uav_aircraft.airframe import CONTROLS, MAX_OUTPUTS, Airframe, outputs_of_controls
-from uav_common.channels import AIR_DATA_CHANNELS, CONTROL_CHANNELS, state_indices
+from uav_common.channels import AIRSPEED_INDEX, CONTROL_CHANNELS, state_indices
 from uav_sim.simulation import Sample
 
 from uav_fault_estimator.flight_logs.axes import quaternions_from_euler
@@ -75,13 +75,12 @@ def logged_flight(samples: Sequence[Sample], airframe: Airframe) -> LoggedFlight
                                                                      strict=True))).items():
             outputs_us[k, output - 1] = pwm_us
     air_data = [sample.air_data for sample in samples]
-    airspeed = AIR_DATA_CHANNELS.index("airspeed")
     return LoggedFlight(
         times_s=np.array([sample.time_s for sample in samples]),
         states=np.array([sample.state for sample in samples]),
         outputs_us=outputs_us,
         airspeed_mps=None if air_data[0] is None
-        else np.array([row[airspeed] for row in air_data]),
+        else np.array([row[AIRSPEED_INDEX] for row in air_data]),
         wind_ne_mps=np.array([sample.wind_ned_mps[:2] for sample in samples]))
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 from uav_aircraft.airframe import load_airframe
-from uav_common.channels import AIR_DATA_CHANNELS
+from uav_common.channels import AIR_DATA_CHANNELS, AIRSPEED_INDEX
 
 from uav_fault_estimator.flight_logs.readers import read_log
 from uav_fault_estimator.flight_logs.resample import DetectorInputs, detector_samples
@@ -45,7 +45,7 @@ def air_data_rows(airspeed_mps: np.ndarray) -> np.ndarray:
     """(K, 3) rows in AIR_DATA_CHANNELS order from airspeed_mps (K,) [m/s]: the airspeed,
     the vanes' angles NaN (missing)."""
     rows = np.full((airspeed_mps.size, len(AIR_DATA_CHANNELS)), np.nan)
-    rows[:, AIR_DATA_CHANNELS.index("airspeed")] = airspeed_mps
+    rows[:, AIRSPEED_INDEX] = airspeed_mps
     return rows
 
 
