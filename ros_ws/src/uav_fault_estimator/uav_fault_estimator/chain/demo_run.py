@@ -501,8 +501,8 @@ def mhe_overrides(scenario: Scenario, through_link: bool = False) -> dict[str, A
     sensors a MAVLink link carries, a pitot without vanes), then its `estimator:` overrides;
     ScenarioError for a parameter mhe_node does not have. Integers given for real
     parameters become reals (ROS parameters do not convert)."""
-    air_data, vanes = (True, False) if through_link else (scenario.sensors.air_data,
-                                                           scenario.sensors.vanes)
+    air_data, vanes = node_graph.LINK_SENSORS if through_link else (
+        scenario.sensors.air_data, scenario.sensors.vanes)
     defaults = {name: spec.default for name, spec in MHE_PARAMETERS.items()}
     overrides: dict[str, Any] = sensor_overrides(air_data, vanes)
     for name, value in scenario.estimator.items():

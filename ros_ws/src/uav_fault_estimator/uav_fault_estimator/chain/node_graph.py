@@ -33,6 +33,9 @@ from uav_fault_estimator.estimation.estimator_settings import sensor_overrides
 from uav_fault_estimator.estimation.model_file import load_model_calibration
 
 SIMULATOR, LISTENER, AUTOPILOT = "sim_node", "mavlink_node", "autopilot_node"
+# What a MAVLink link carries of an aircraft's air data, (air data, vanes): the pitot's
+# airspeed, no flow angles
+LINK_SENSORS = (True, False)
 PACKAGES = {SIMULATOR: "uav_sim", "residual_node": "uav_fault_estimator",
             "mhe_node": "uav_fault_estimator", "detector_node": "uav_fault_estimator",
             "standard_topics_node": "uav_fault_estimator",
@@ -203,8 +206,7 @@ def live_plan(scenarios: Sequence[Path], namespace: str = "", params: Path | Non
     namespaces = vehicle_namespaces(max(len(scenarios), 1), namespace)
     common = ["--params-file", str(params)] if params else []
     vehicles = [vehicle] if mavlink else scenario_vehicles(scenarios)
-    # a link carries a pitot's airspeed and no vanes
-    sensors = [(True, False)] if mavlink else scenario_sensors(scenarios)
+    sensors = [LINK_SENSORS] if mavlink else scenario_sensors(scenarios)
     plan = []
     for index in reversed(range(len(namespaces))):
         namespace = namespaces[index]

@@ -249,10 +249,10 @@ class MheNode(Node):
         })
 
 
-def air_data_message(stamp: Header, air_data: AirDataEstimate) -> AirDataEstimateMessage:
+def air_data_message(header: Header, air_data: AirDataEstimate) -> AirDataEstimateMessage:
     """The synthetic air data as its message, under the estimate's header."""
     return AirDataEstimateMessage(
-        header=stamp, true_airspeed_mps=air_data.true_airspeed_mps,
+        header=header, true_airspeed_mps=air_data.true_airspeed_mps,
         angle_of_attack_rad=air_data.angle_of_attack_rad, sideslip_rad=air_data.sideslip_rad,
         wind_ned_mps=air_data.wind_ned_mps.tolist(),
         angle_of_attack_std_rad=air_data.angle_of_attack_std_rad,
