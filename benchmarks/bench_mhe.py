@@ -8,7 +8,7 @@
    mhe_node's default configuration (EstimatorSettings: N = 50, four monotonic faults
    bounded to [0, 100] %), first with the four faults alone (p = 4), then, on the same
    flight with a pitot and no vanes, with the three wind-error columns as well (the window
-   of an aircraft without vanes: `estimate_wind_errors`, the pitot suite's Q). The project's
+   of an aircraft without vanes: `estimate_wind_errors`, N = 70, the pitot suite's Q). The project's
    estimator runs it (the whole `update` call, as the node makes it); the same QPs then go,
    through the estimator's solver interface (solvers.WindowSolver), to the solvers of
    benchmarks/qp_solvers.py: PIQP (sparse, set up once, `update(P, c)`), OSQP (same

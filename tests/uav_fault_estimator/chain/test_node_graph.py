@@ -14,6 +14,7 @@ from uav_fault_estimator.chain.node_graph import (
     node_ros_args,
     vehicle_namespaces,
 )
+from uav_fault_estimator.estimation.estimator_settings import VANELESS_HORIZON, EstimatorSettings
 from uav_sim.paths import scenarios_dir
 
 SIM_TIME = ["-p", "use_sim_time:=true"]
@@ -128,8 +129,10 @@ def test_the_link_listener_takes_its_vehicle_and_the_parameter_file(vehicle):
 @pytest.mark.timeout(30)
 def test_behind_a_link_or_without_vanes_the_estimator_takes_the_wind_errors(tmp_path):
     """A link carries a pitot and no vanes, and so does a scenario saying so: mhe_node then
-    estimates the wind errors; with vanes it keeps its default."""
+    estimates the wind errors over the longer window; with vanes it keeps its defaults."""
     wind_errors = ["-p", "estimate_wind_errors:=true"]
+    longer_window = ["-p", f"horizon:={VANELESS_HORIZON}"]
+    assert EstimatorSettings().horizon < VANELESS_HORIZON
 
     def mhe_args(plan) -> list[str]:
         return next(node.ros_args for node in plan if node.executable == "mhe_node")
@@ -142,6 +145,7 @@ def test_behind_a_link_or_without_vanes_the_estimator_takes_the_wind_errors(tmp_
                                               "sensors: {air_data: true, noise: true, "
                                               "vanes: false}"))
     assert "vanes: false" in vaneless.read_text()
-    assert has(mhe_args(live_plan([], mavlink="udpin:127.0.0.1:14550")), wind_errors)
-    assert has(mhe_args(live_plan([vaneless])), wind_errors)
-    assert not has(mhe_args(live_plan([A])), wind_errors)
+    for plan in (live_plan([], mavlink="udpin:127.0.0.1:14550"), live_plan([vaneless])):
+        assert has(mhe_args(plan), wind_errors) and has(mhe_args(plan), longer_window)
+    with_vanes = mhe_args(live_plan([A]))
+    assert not has(with_vanes, wind_errors) and not any("horizon" in a for a in with_vanes)
