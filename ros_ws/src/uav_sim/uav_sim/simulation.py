@@ -53,6 +53,7 @@ from uav_sim.wind import (
 )
 
 CONTROL_STEPS = 4  # autopilot and the from_wind gusts at 120 Hz: every 4th JSBSim step
+SENSOR_RATE_HZ = 20.0  # the sensors' default sample rate
 # Random streams of the scenario seed: one per purpose, so that one's draws never shift
 # another's (flying without air data leaves the turbulence and state noise as they were).
 TURBULENCE_STREAM, STATE_SENSOR_STREAM, AIR_DATA_SENSOR_STREAM = 1, 2, 3
@@ -113,7 +114,7 @@ class Sample:
 class Simulation:
     """Flies a scenario at a sensor rate that divides JSBSim's 480 Hz."""
 
-    def __init__(self, scenario: Scenario, sensor_rate_hz: float = 20.0) -> None:
+    def __init__(self, scenario: Scenario, sensor_rate_hz: float = SENSOR_RATE_HZ) -> None:
         steps = round(1.0 / (JSBSIM_DT_S * sensor_rate_hz))
         if sensor_rate_hz <= 0 or not math.isclose(steps * JSBSIM_DT_S * sensor_rate_hz, 1.0):
             raise ValueError(

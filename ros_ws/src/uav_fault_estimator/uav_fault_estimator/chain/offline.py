@@ -18,7 +18,7 @@ from uav_common.channels import AIRSPEED_INDEX, FAULT_NAMES
 from uav_common.sample_grid import on_grid
 from uav_common.settings import settings_from
 from uav_sim.scenario import Scenario, load_scenario, vehicle_scenario_path
-from uav_sim.simulation import Simulation
+from uav_sim.simulation import SENSOR_RATE_HZ, Simulation
 
 from uav_fault_estimator.campaigns.campaign import Campaign
 from uav_fault_estimator.detection.detector import DetectorFlight
@@ -158,10 +158,10 @@ def fly_on_grid_each(campaign: Campaign, scenarios: Sequence[Scenario],
                             "flights")
 
 
-def sensor_flight(scenario: Scenario) -> SensorFlight:
-    """The scenario's samples at the sensor rate as a recording of them gives them (what a
-    model calibration reads)."""
-    simulation = Simulation(scenario)
+def sensor_flight(scenario: Scenario, sensor_rate_hz: float = SENSOR_RATE_HZ) -> SensorFlight:
+    """The scenario's samples at the sensor rate [Hz] as a recording of them gives them (what
+    a model calibration reads)."""
+    simulation = Simulation(scenario, sensor_rate_hz)
     samples = [simulation.sample()]
     while not simulation.finished:
         samples.append(simulation.step())

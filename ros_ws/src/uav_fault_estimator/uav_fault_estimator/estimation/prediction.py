@@ -62,7 +62,7 @@ _VELOCITY_NED = [_STATE[name] for name in ("velocity_north", "velocity_east", "v
 _BODY_RATES = [_STATE[name] for name in ("roll_rate", "pitch_rate", "yaw_rate")]
 
 
-def _commands(vehicle: Vehicle) -> dict[str, tuple[str, float]]:
+def control_commands(vehicle: Vehicle) -> dict[str, tuple[str, float]]:
     """Control channel -> (JSBSim command, measured value per unit command). Surfaces follow
     their commands without lag in the vehicle's FCS, so the measured position gives the
     command."""
@@ -114,7 +114,7 @@ class AircraftPredictor:
         self.faults_pct = dict(faults_pct)
         self.propeller = propeller
         self.steady_engine_speed = steady_engine_speed
-        self.commands = _commands(vehicle)
+        self.commands = control_commands(vehicle)
         self.fdm: jsbsim.FGFDMExec = create_fdm(vehicle, aircraft=aircraft)
         self.fdm[JSBSIM_ENGINE_ON] = 0
         set_faults(self.fdm, self.faults_pct)
@@ -154,21 +154,31 @@ class AircraftPredictor:
             set_value(max(command, 0.0) if channel == "flap" else command)
         self.set_fuel(float(state[_STATE["fuel_mass"]]) / KG_PER_LB)
         fdm.run_ic()
-        density_kg_m3 = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
-        effective_throttle = fdm[EFFECTIVE_THROTTLE]
-        axial_speed_mps = fdm["velocities/u-aero-fps"] * M_PER_FT
-        engine_rpm = (self.propeller.steady_rpm(effective_throttle, axial_speed_mps,
-                                                density_kg_m3)
-                      if self.steady_engine_speed else float(state[_STATE["engine_speed"]]))
-        propeller_forces = self.propeller.forces(
-            engine_rpm, effective_throttle, axial_speed_mps, density_kg_m3, body_rates_radps)
-        apply_propeller_model(fdm, propeller_forces)
+        turn_propeller(fdm, self.propeller,
+                       None if self.steady_engine_speed else float(state[_STATE["engine_speed"]]),
+                       body_rates_radps)
         fdm.run_ic()
         derivatives = np.array([fdm[name] for name in BODY_ACCELERATIONS])
         velocity_rate_body = derivatives[:3] * M_PER_FT + _cross(
             body_rates_radps, air_velocity_body_mps
         )
         return np.concatenate([to_body.T @ velocity_rate_body, derivatives[3:]])
+
+
+def turn_propeller(fdm: jsbsim.FGFDMExec, propeller: Propeller, engine_rpm: float | None,
+                   body_rates_radps: np.ndarray) -> None:
+    """Put the propeller's thrust and hub moment on the aircraft's `propeller_model`
+    reactions (its JSBSim engine off): at engine_rpm [rpm], or where None at the speed where
+    it absorbs the engine's power at the throttle; the air density, effective throttle and
+    axial speed JSBSim's last evaluation left; body_rates_radps (3,) for the gyroscopic
+    moment."""
+    density_kg_m3 = fdm["atmosphere/rho-slugs_ft3"] * KG_PER_M3_PER_SLUG_PER_FT3
+    effective_throttle = fdm[EFFECTIVE_THROTTLE]
+    axial_speed_mps = fdm["velocities/u-aero-fps"] * M_PER_FT
+    if engine_rpm is None:
+        engine_rpm = propeller.steady_rpm(effective_throttle, axial_speed_mps, density_kg_m3)
+    apply_propeller_model(fdm, propeller.forces(
+        engine_rpm, effective_throttle, axial_speed_mps, density_kg_m3, body_rates_radps))
 
 
 def aircraft_predictor_factory(vehicle: Vehicle, aircraft: FlownAircraft = NOMINAL,

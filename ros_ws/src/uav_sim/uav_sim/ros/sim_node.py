@@ -59,7 +59,7 @@ from uav_fault_msgs.msg import (
 )
 
 from uav_sim.scenario import default_scenario_path, load_scenario
-from uav_sim.simulation import Sample, Simulation
+from uav_sim.simulation import SENSOR_RATE_HZ, Sample, Simulation
 
 PARAMETERS = {
     "scenario": ParameterSpec("scenario YAML file; empty: the shipped scenarios/default.yaml",
@@ -69,7 +69,7 @@ PARAMETERS = {
                              empty_choice="the scenario's"),
     # at least 1 Hz; at most JSBSim's own 480 Hz (and a divisor of it: Simulation checks)
     "sensor_rate_hz": ParameterSpec("rate of every published stream and of /clock, a divisor "
-                                    "of 480 [Hz]", 20.0,
+                                    "of 480 [Hz]", SENSOR_RATE_HZ,
                                     1.0, 480.0),
     "real_time_factor": ParameterSpec(
         "simulated seconds per wall second; 0: as fast as subscribers keep up", 1.0, 0.0, 1000.0,
