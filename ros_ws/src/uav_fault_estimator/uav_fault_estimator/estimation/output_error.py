@@ -256,17 +256,14 @@ def fit_output_error(flyer: ManoeuvreFlyer, manoeuvres: Sequence[Manoeuvre],
                              bounds=(lower, upper), diff_step=DIFFERENCE_STEP, x_scale="jac",
                              method="trf", ftol=COST_TOLERANCE, xtol=COST_TOLERANCE)
 
+    counted = np.vstack([np.isfinite(z) for z in measured])
     x = guess
     for _ in range(relaxations):
         result = solve(x)
         x = result.x
-        errors = np.vstack([output_errors(z, flyer.fly(parameters, x[:n], m, unknowns))
-                            for m, z, unknowns in zip(
-                                manoeuvres, measured,
-                                x[n:].reshape(len(manoeuvres), MANOEUVRE_UNKNOWNS),
-                                strict=True)])
-        integrations += len(manoeuvres)
-        counted = np.vstack([np.isfinite(z) for z in measured])
+        # the output errors at the optimum: its weighted errors (after the prior's rows)
+        # times the weights' deviations
+        errors = result.fun[n:].reshape(-1, len(OUTPUT_NAMES)) * output_std
         mean_square = (errors**2).sum(axis=0) / np.maximum(counted.sum(axis=0), 1)
         output_std = np.where(counted.any(axis=0), np.sqrt(mean_square), output_std)
     result = solve(x)
@@ -284,7 +281,7 @@ def fit_output_error(flyer: ManoeuvreFlyer, manoeuvres: Sequence[Manoeuvre],
     )
 
 
-def _jacobian_sparsity(parameters: int, samples: Sequence[int]):
+def _jacobian_sparsity(parameters: int, samples: Sequence[int]) -> lil_matrix:
     """Which weighted errors each unknown moves: the parameters all, a manoeuvre's unknowns
     its own outputs; the prior's rows their own parameter."""
     outputs = len(OUTPUT_NAMES)
